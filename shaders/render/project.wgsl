@@ -1,0 +1,125 @@
+// Pass 1 of the renderer: project every Gaussian (SPEC §7).
+// Per Gaussian: view-space mean, 2D covariance Σ' = J W Σ Wᵀ Jᵀ + 0.3 I, its inverse (the
+// conic), the screen radius from 3 standard deviations, the rectangle of 16×16 tiles it
+// touches, its SH colour, and its depth key for the global depth sort.
+// Mirrors `render::cpu::project_gaussian`.
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+@group(0) @binding(1) var<storage, read> gaussians: array<GaussianIn>;
+@group(0) @binding(2) var<storage, read> sh_words: array<u32>;
+@group(0) @binding(3) var<storage, read_write> projected: array<Projected>;
+// Packed tile rectangle: min.x | min.y << 16 and max.x | max.y << 16 (max exclusive).
+@group(0) @binding(4) var<storage, read_write> tile_rects: array<vec2<u32>>;
+@group(0) @binding(5) var<storage, read_write> depth_keys: array<u32>;
+@group(0) @binding(6) var<storage, read_write> depth_order: array<u32>;
+@group(0) @binding(7) var<storage, read_write> stats: Stats;
+
+// Culled Gaussians sort after every visible one and touch no tile.
+const CULLED_KEY: u32 = 0xffffffffu;
+
+fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    // Rotate v by q⁻¹ (q unit, xyzw): v + 2 w (v × u) + 2 u × (u × v)... with u = -q.xyz.
+    let u = -q.xyz;
+    let t = 2.0 * cross(u, v);
+    return v + q.w * t + cross(u, t);
+}
+
+fn cull(g: u32) {
+    tile_rects[g] = vec2<u32>(0u, 0u);
+    depth_keys[g] = CULLED_KEY;
+    depth_order[g] = g;
+}
+
+fn all_finite4(v: vec4<f32>) -> bool {
+    // Test the exponent bits: float comparisons with NaN may be optimised away by drivers
+    // that assume finite math (seen on llvmpipe's GL).
+    let exponent = bitcast<vec4<u32>>(v) & vec4<u32>(0x7f800000u);
+    return all(exponent != vec4<u32>(0x7f800000u));
+}
+
+fn is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let g = flat_workgroup(wid, nwg) * 256u + lid;
+    if g >= frame.num_gaussians {
+        return;
+    }
+    let gin = gaussians[g];
+    if !(all_finite4(gin.mean_opacity) && all_finite4(gin.cov_a) && all_finite4(gin.cov_b) && all_finite4(gin.rotation)) {
+        atomicAdd(&stats.skipped_nonfinite, 1u);
+        cull(g);
+        return;
+    }
+    let mean = gin.mean_opacity.xyz;
+    let opacity = gin.mean_opacity.w;
+    let cam = frame.camera_near.xyz;
+    let w = mat3x3<f32>(frame.view_row0.xyz, frame.view_row1.xyz, frame.view_row2.xyz); // rows as columns: w = Wᵀ
+    let t = (mean - cam) * w; // row-vector product = W (mean - cam)
+    if t.z < frame.camera_near.w || opacity <= 0.0 {
+        cull(g);
+        return;
+    }
+
+    // Perspective Jacobian at the (clamped) mean, as in the 3DGS reference.
+    let fx = frame.focal_principal.x;
+    let fy = frame.focal_principal.y;
+    let tz = t.z;
+    let tx = clamp(t.x / tz, -frame.lim_x, frame.lim_x) * tz;
+    let ty = clamp(t.y / tz, -frame.lim_y, frame.lim_y) * tz;
+    // Rows of J (3rd row is zero).
+    let j0 = vec3<f32>(fx / tz, 0.0, -fx * tx / (tz * tz));
+    let j1 = vec3<f32>(0.0, fy / tz, -fy * ty / (tz * tz));
+    // Rows of T = J W: row_i(T) = row_i(J) W = W ᵀ row_i(J) = w * row_i(J)... as vectors:
+    let t0 = w * j0;
+    let t1 = w * j1;
+    let sigma = mat3x3<f32>(
+        vec3<f32>(gin.cov_a.x, gin.cov_a.y, gin.cov_a.z),
+        vec3<f32>(gin.cov_a.y, gin.cov_a.w, gin.cov_b.x),
+        vec3<f32>(gin.cov_a.z, gin.cov_b.x, gin.cov_b.y));
+    let s0 = sigma * t0;
+    let s1 = sigma * t1;
+    let a = dot(t0, s0) + 0.3;
+    let b = dot(t0, s1);
+    let c = dot(t1, s1) + 0.3;
+    let det = a * c - b * b;
+    if !(det > 0.0) || !is_finite(det) {
+        atomicAdd(&stats.skipped_degenerate, 1u);
+        cull(g);
+        return;
+    }
+    let conic = vec3<f32>(c / det, -b / det, a / det);
+    let mid = 0.5 * (a + c);
+    let lambda1 = mid + sqrt(max(0.1, mid * mid - det));
+    let radius = ceil(3.0 * sqrt(lambda1));
+    let px = fx * t.x / tz + frame.focal_principal.z;
+    let py = fy * t.y / tz + frame.focal_principal.w;
+    if !(is_finite(px) && is_finite(py) && is_finite(radius)) {
+        atomicAdd(&stats.skipped_degenerate, 1u);
+        cull(g);
+        return;
+    }
+    // Tile rectangle [min, max) clamped to the grid; computed in f32 so that a huge radius
+    // cannot overflow an integer.
+    let grid = vec2<f32>(f32(frame.tiles_x), f32(frame.tiles_y));
+    let rmin = clamp(floor((vec2<f32>(px, py) - radius) / f32(TILE)), vec2<f32>(0.0), grid);
+    let rmax = clamp(floor((vec2<f32>(px, py) + radius + f32(TILE - 1u)) / f32(TILE)), vec2<f32>(0.0), grid);
+    let mn = vec2<u32>(rmin);
+    let mx = vec2<u32>(rmax);
+    if mx.x <= mn.x || mx.y <= mn.y {
+        cull(g);
+        return;
+    }
+    atomicAdd(&stats.visible, 1u);
+    tile_rects[g] = vec2<u32>(mn.x | (mn.y << 16u), mx.x | (mx.y << 16u));
+    // Positive f32 depths sort correctly as their bit patterns.
+    depth_keys[g] = bitcast<u32>(tz);
+    depth_order[g] = g;
+
+    let dir = normalize(mean - cam);
+    let color = sh_color(g, frame.sh_degree, rotate_by_conjugate(gin.rotation, dir));
+    projected[g] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, 0.0), vec4<f32>(color, 0.0));
+}

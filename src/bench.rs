@@ -1,0 +1,157 @@
+//! `splatter bench …`: benchmarks with synthetic, reproducible inputs. Results go to
+//! `docs/performance.md` with the adapter's name.
+
+use std::io::Write;
+use std::time::Instant;
+
+use anyhow::Result;
+use glam::{Mat3, Quat, Vec3};
+use image::ImageEncoder;
+
+use crate::gpu::GpuContext;
+use crate::render::splats::sym3_from_mat3;
+use crate::render::{Camera, GpuRenderer, Splats};
+
+/// A deterministic PRNG (splitmix64) for synthetic scenes.
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        (z >> 40) as f32 / (1u64 << 24) as f32
+    }
+
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.next_f32()
+    }
+}
+
+/// `n` Gaussians of SH degree `degree` filling a ball of radius 1, sized like a trained
+/// capture of that density (scale ≈ the mean spacing), random orientations and colours.
+pub fn synthetic_splats(n: usize, degree: u32, seed: u64) -> Splats {
+    let mut rng = SplitMix(seed);
+    let k = crate::splat::sh_coeff_count(degree) * 3;
+    let spacing = (4.19 / n.max(1) as f32).cbrt();
+    let mut s = Splats {
+        sh_degree: degree,
+        ..Default::default()
+    };
+    s.means.reserve(n);
+    s.covariances.reserve(n);
+    s.sh.reserve(n * k);
+    while s.means.len() < n {
+        let p = Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        );
+        if p.length_squared() > 1.0 {
+            continue;
+        }
+        let q = Quat::from_xyzw(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize();
+        let scale = Vec3::new(
+            rng.range(0.3, 1.2),
+            rng.range(0.3, 1.2),
+            rng.range(0.1, 0.6),
+        ) * spacing;
+        let m = Mat3::from_quat(q) * Mat3::from_diagonal(scale);
+        s.means.push(p);
+        s.covariances.push(sym3_from_mat3(m * m.transpose()));
+        s.rotations.push(Quat::IDENTITY);
+        s.opacities.push(rng.range(0.2, 1.0));
+        for j in 0..k {
+            s.sh.push(if j < 3 {
+                rng.range(-1.5, 1.5)
+            } else {
+                rng.range(-0.2, 0.2)
+            });
+        }
+    }
+    s
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Milliseconds per frame for 100k and 1M Gaussians (degree 3) at 1920×1080 and 100k at
+/// 640×360: render passes (submit to GPU idle), readback, and PNG encoding, separately.
+pub fn render_bench(
+    gpu: &GpuContext,
+    repeat: usize,
+    quick: bool,
+    out: &mut dyn Write,
+) -> Result<()> {
+    writeln!(out, "adapter: {}", gpu.describe())?;
+    writeln!(
+        out,
+        "{:>9} {:>11} {:>12} {:>12} {:>10} {:>12}",
+        "gaussians", "resolution", "render ms", "readback ms", "png ms", "tile pairs"
+    )?;
+    let mut cases = vec![(100_000usize, 640u32, 360u32), (100_000, 1920, 1080)];
+    if !quick {
+        cases.push((1_000_000, 1920, 1080));
+    }
+    let mut renderer = GpuRenderer::new(gpu);
+    let mut last_n = 0;
+    for (n, w, h) in cases {
+        if n != last_n {
+            let splats = synthetic_splats(n, 3, 7);
+            renderer.upload(gpu, &splats)?;
+            last_n = n;
+        }
+        let camera = Camera::look_at(
+            Vec3::new(0.0, -2.6, 0.9),
+            Vec3::ZERO,
+            Vec3::Z,
+            50f32.to_radians(),
+            w,
+            h,
+        );
+        // Warm-up: pipelines, buffer growth.
+        let (image, _) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
+        let (mut render, mut readback, mut png) = (Vec::new(), Vec::new(), Vec::new());
+        for _ in 0..repeat {
+            let (image, t) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
+            render.push(t.render_ms);
+            readback.push(t.readback_ms);
+            let start = Instant::now();
+            let mut bytes = Vec::new();
+            let rgb: Vec<u8> = image
+                .rgba
+                .chunks_exact(4)
+                .flat_map(|p| [p[0], p[1], p[2]])
+                .collect();
+            image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+                &rgb,
+                w,
+                h,
+                image::ExtendedColorType::Rgb8,
+            )?;
+            png.push(start.elapsed().as_secs_f64() * 1e3);
+        }
+        writeln!(
+            out,
+            "{:>9} {:>11} {:>12.2} {:>12.2} {:>10.2} {:>12}",
+            n,
+            format!("{w}x{h}"),
+            median(&mut render),
+            median(&mut readback),
+            median(&mut png),
+            image.stats.intersections
+        )?;
+        out.flush()?;
+    }
+    Ok(())
+}

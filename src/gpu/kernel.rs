@@ -1,0 +1,143 @@
+//! A compute kernel: one WGSL entry point with a bind-group layout derived from the shader.
+
+use std::borrow::Cow;
+
+/// A compute pipeline whose bind group 0 takes buffers at bindings 0, 1, 2, … in order.
+pub struct Kernel {
+    pub pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    label: &'static str,
+}
+
+impl Kernel {
+    /// Compile `source` (already assembled from its WGSL parts) and take `entry`.
+    pub fn new(device: &wgpu::Device, label: &'static str, source: &str, entry: &str) -> Kernel {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_owned())),
+        });
+        Kernel::from_module(device, label, &module, entry)
+    }
+
+    pub fn from_module(
+        device: &wgpu::Device,
+        label: &'static str,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+    ) -> Kernel {
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: None,
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let layout = pipeline.get_bind_group_layout(0);
+        Kernel {
+            pipeline,
+            layout,
+            label,
+        }
+    }
+
+    /// Bind `buffers` to bindings 0, 1, 2, … (whole buffers).
+    pub fn bind(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Bind buffers at explicit binding numbers (for entry points that skip some).
+    pub fn bind_at(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(u32, &wgpu::Buffer)],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: *i,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Record one dispatch of `groups` workgroups (split over x and y, see [`dispatch_1d`]).
+    pub fn dispatch(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        groups: u32,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.label),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        let (x, y) = dispatch_1d(groups);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// Record a dispatch of an explicit 2D grid of workgroups.
+    pub fn dispatch_2d(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind: &wgpu::BindGroup,
+        x: u32,
+        y: u32,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(self.label),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+    }
+}
+
+/// Split `groups` workgroups into an (x, y) grid with x ≤ 65535 (the portable limit per
+/// dimension). Kernels flatten it as `wid.x + wid.y * num_workgroups.x` and bounds-check,
+/// since x · y may exceed `groups`.
+pub fn dispatch_1d(groups: u32) -> (u32, u32) {
+    const MAX: u32 = 65535;
+    if groups <= MAX {
+        (groups.max(1), 1)
+    } else {
+        let y = groups.div_ceil(MAX);
+        (groups.div_ceil(y), y)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::dispatch_1d;
+
+    #[test]
+    fn dispatch_covers_every_group() {
+        for g in [1u32, 255, 65535, 65536, 200_000, 4_000_000] {
+            let (x, y) = dispatch_1d(g);
+            assert!(
+                x <= 65535 && x as u64 * y as u64 >= g as u64,
+                "{g}: {x}×{y}"
+            );
+        }
+    }
+}

@@ -1,0 +1,199 @@
+//! Frame output: PNGs encoded on a worker thread and written to a temporary name, then
+//! renamed, so a crash or a full disk never leaves a truncated `frame_*.png`; and the
+//! progress display.
+
+mod progress;
+
+pub use progress::Progress;
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot create the output directory {path}: {source}")]
+    CreateDir {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot write {path}: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("cannot encode {path}: {source}")]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    #[error("the frame writer thread stopped unexpectedly")]
+    WriterGone,
+}
+
+/// `DIR/frame_00042.png`.
+pub fn frame_path(dir: &Path, frame: u32) -> PathBuf {
+    dir.join(format!("frame_{frame:05}.png"))
+}
+
+/// Encode an RGBA8 image as an RGB PNG at `path`, atomically (temporary name, then rename).
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), OutputError> {
+    let rgb: Vec<u8> = rgba
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let tmp = temporary_name(path);
+    let result = image::save_buffer_with_format(
+        &tmp,
+        &rgb,
+        width,
+        height,
+        image::ExtendedColorType::Rgb8,
+        image::ImageFormat::Png,
+    );
+    if let Err(source) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(match source {
+            image::ImageError::IoError(source) => OutputError::Write {
+                path: path.to_owned(),
+                source,
+            },
+            source => OutputError::Encode {
+                path: path.to_owned(),
+                source,
+            },
+        });
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::Write {
+            path: path.to_owned(),
+            source,
+        }
+    })
+}
+
+/// `frame_00001.png` → `.frame_00001.png.tmp` (hidden, so globbing `frame_*.png` never
+/// matches a partial file).
+fn temporary_name(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp"))
+}
+
+struct Job {
+    path: PathBuf,
+    width: u32,
+    height: u32,
+    rgba: Vec<u8>,
+}
+
+/// Encodes and writes frames on a worker thread while the GPU renders the next one.
+/// At most `depth` frames wait in the queue, so memory stays bounded.
+pub struct FrameWriter {
+    tx: Option<mpsc::SyncSender<Job>>,
+    worker: Option<JoinHandle<Result<Duration, OutputError>>>,
+}
+
+use std::time::{Duration, Instant};
+
+impl FrameWriter {
+    pub fn new(depth: usize) -> FrameWriter {
+        let (tx, rx) = mpsc::sync_channel::<Job>(depth);
+        let worker = std::thread::spawn(move || {
+            let mut busy = Duration::ZERO;
+            for job in rx {
+                let start = Instant::now();
+                write_png(&job.path, job.width, job.height, &job.rgba)?;
+                busy += start.elapsed();
+            }
+            Ok(busy)
+        });
+        FrameWriter {
+            tx: Some(tx),
+            worker: Some(worker),
+        }
+    }
+
+    /// Queue a frame. Fails if an earlier write failed (the error is returned by `finish`).
+    pub fn submit(
+        &mut self,
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        rgba: Vec<u8>,
+    ) -> Result<(), OutputError> {
+        let tx = self.tx.as_ref().ok_or(OutputError::WriterGone)?;
+        if tx
+            .send(Job {
+                path,
+                width,
+                height,
+                rgba,
+            })
+            .is_err()
+        {
+            // The worker stopped: report its error.
+            return Err(self.join().err().unwrap_or(OutputError::WriterGone));
+        }
+        Ok(())
+    }
+
+    /// Wait for every queued frame; returns the time spent encoding and writing.
+    pub fn finish(mut self) -> Result<Duration, OutputError> {
+        self.join()
+    }
+
+    fn join(&mut self) -> Result<Duration, OutputError> {
+        self.tx = None;
+        match self.worker.take() {
+            Some(w) => w.join().map_err(|_| OutputError::WriterGone)?,
+            None => Err(OutputError::WriterGone),
+        }
+    }
+}
+
+impl Drop for FrameWriter {
+    fn drop(&mut self) {
+        if self.worker.is_some() {
+            let _ = self.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn png_is_written_atomically_and_reads_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = frame_path(dir.path(), 3);
+        let rgba: Vec<u8> = (0..4 * 6).map(|i| (i * 10) as u8).collect();
+        write_png(&path, 3, 2, &rgba).unwrap();
+        assert!(path.ends_with("frame_00003.png"));
+        let img = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), (3, 2));
+        assert_eq!(img.get_pixel(1, 0).0, [40, 50, 60]);
+        let leftovers: Vec<_> = std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .collect();
+        assert_eq!(leftovers.len(), 1, "no temporary file left behind");
+    }
+
+    #[test]
+    fn writer_reports_an_unwritable_directory() {
+        let mut w = FrameWriter::new(2);
+        let bad = PathBuf::from("/nonexistent-dir-for-splatter-test/frame_00000.png");
+        let _ = w.submit(bad, 1, 1, vec![0, 0, 0, 255]);
+        let err = w.finish().unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("nonexistent-dir-for-splatter-test"),
+            "{err}"
+        );
+    }
+}

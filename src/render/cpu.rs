@@ -1,0 +1,175 @@
+//! The CPU reference renderer: the same math as the GPU passes (projection, SH colour,
+//! tile rectangles, front-to-back compositing with the same thresholds), written as a plain
+//! per-pixel loop over depth-sorted Gaussians. It is the oracle the GPU renderer is tested
+//! against, and slow on purpose: clarity over speed.
+
+use glam::{Mat3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::gpu::layout::{FOV_CLAMP, TILE};
+use super::splats::mat3_from_sym3;
+use super::{Camera, Splats};
+use crate::splat::sh;
+
+/// A Gaussian projected to the screen.
+#[derive(Clone, Copy, Debug)]
+pub struct ProjectedGaussian {
+    pub index: usize,
+    pub depth: f32,
+    pub xy: Vec2,
+    /// Inverse 2D covariance (a, b, c) of [[a, b], [b, c]].
+    pub conic: Vec3,
+    pub opacity: f32,
+    pub color: Vec3,
+    /// Tile rectangle [min, max).
+    pub tile_min: (u32, u32),
+    pub tile_max: (u32, u32),
+}
+
+/// Project Gaussian `i` (SPEC §7); `None` when culled or degenerate.
+pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<ProjectedGaussian> {
+    let mean = splats.means[i];
+    let opacity = splats.opacities[i];
+    let w = camera.world_to_camera();
+    let t = w * (mean - camera.position);
+    if !(t.z >= camera.near) || opacity <= 0.0 || !mean.is_finite() {
+        return None;
+    }
+    let (tan_x, tan_y) = camera.tan_half_fov();
+    let (lim_x, lim_y) = (FOV_CLAMP * tan_x, FOV_CLAMP * tan_y);
+    let (fx, fy) = (camera.fx, camera.fy);
+    let tz = t.z;
+    let tx = (t.x / tz).clamp(-lim_x, lim_x) * tz;
+    let ty = (t.y / tz).clamp(-lim_y, lim_y) * tz;
+    let j0 = Vec3::new(fx / tz, 0.0, -fx * tx / (tz * tz));
+    let j1 = Vec3::new(0.0, fy / tz, -fy * ty / (tz * tz));
+    // Rows of T = J W, as column vectors Wᵀ j_i.
+    let wt: Mat3 = w.transpose();
+    let t0 = wt * j0;
+    let t1 = wt * j1;
+    let sigma = mat3_from_sym3(splats.covariances[i]);
+    let a = t0.dot(sigma * t0) + 0.3;
+    let b = t0.dot(sigma * t1);
+    let c = t1.dot(sigma * t1) + 0.3;
+    let det = a * c - b * b;
+    if !(det > 0.0) || !det.is_finite() {
+        return None;
+    }
+    let conic = Vec3::new(c / det, -b / det, a / det);
+    let mid = 0.5 * (a + c);
+    let lambda1 = mid + (mid * mid - det).max(0.1).sqrt();
+    let radius = (3.0 * lambda1.sqrt()).ceil();
+    let (cx, cy) = camera.principal_point();
+    let xy = Vec2::new(fx * t.x / tz + cx, fy * t.y / tz + cy);
+    let tiles = Vec2::new(
+        camera.width.div_ceil(TILE) as f32,
+        camera.height.div_ceil(TILE) as f32,
+    );
+    let tile = TILE as f32;
+    let rmin = ((xy - radius) / tile).floor().clamp(Vec2::ZERO, tiles);
+    let rmax = ((xy + radius + (tile - 1.0)) / tile)
+        .floor()
+        .clamp(Vec2::ZERO, tiles);
+    if !(rmax.x > rmin.x && rmax.y > rmin.y) {
+        return None;
+    }
+    let dir = (mean - camera.position).normalize();
+    let local = splats.rotations[i].conjugate() * dir;
+    let stride = splats.sh_stride();
+    let color = sh::eval(
+        splats.sh_degree,
+        &splats.sh[i * stride..(i + 1) * stride],
+        local,
+    );
+    Some(ProjectedGaussian {
+        index: i,
+        depth: tz,
+        xy,
+        conic,
+        opacity,
+        color,
+        tile_min: (rmin.x as u32, rmin.y as u32),
+        tile_max: (rmax.x as u32, rmax.y as u32),
+    })
+}
+
+/// Render to RGBA8 (alpha 255), row-major.
+pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
+    let mut list: Vec<ProjectedGaussian> = (0..splats.len())
+        .into_par_iter()
+        .filter_map(|i| project_gaussian(splats, i, camera))
+        .collect();
+    // Same order as the GPU: by depth, ties by index (the radix sort is stable).
+    list.sort_by(|a, b| {
+        a.depth
+            .to_bits()
+            .cmp(&b.depth.to_bits())
+            .then(a.index.cmp(&b.index))
+    });
+    let (w, h) = (camera.width, camera.height);
+    let mut out = vec![0u8; (w * h * 4) as usize];
+    out.par_chunks_mut((w * 4) as usize)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let y = y as u32;
+            for x in 0..w {
+                let c = shade_pixel(&list, x, y, background);
+                let px = &mut row[(x * 4) as usize..(x * 4 + 4) as usize];
+                px.copy_from_slice(&[to_u8(c.x), to_u8(c.y), to_u8(c.z), 255]);
+            }
+        });
+    out
+}
+
+/// Front-to-back compositing of one pixel (SPEC §7).
+pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3) -> Vec3 {
+    let (tx, ty) = (x / TILE, y / TILE);
+    let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    let mut t = 1.0f32;
+    let mut rgb = Vec3::ZERO;
+    for g in list {
+        if tx < g.tile_min.0 || tx >= g.tile_max.0 || ty < g.tile_min.1 || ty >= g.tile_max.1 {
+            continue;
+        }
+        let d = g.xy - centre;
+        let power = -0.5 * (g.conic.x * d.x * d.x + g.conic.z * d.y * d.y) - g.conic.y * d.x * d.y;
+        if power > 0.0 {
+            continue;
+        }
+        let alpha = (g.opacity * power.exp()).min(0.99);
+        if alpha < 1.0 / 255.0 {
+            continue;
+        }
+        let next_t = t * (1.0 - alpha);
+        if next_t < 1e-4 {
+            break;
+        }
+        rgb += g.color * (alpha * t);
+        t = next_t;
+    }
+    (rgb + t * background).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// The rounding of WGSL's `pack4x8unorm`: round(clamp(c, 0, 1) × 255).
+pub fn to_u8(c: f32) -> u8 {
+    (c.clamp(0.0, 1.0) * 255.0 + 0.5).floor() as u8
+}
+
+/// Peak signal-to-noise ratio in dB of two RGBA8 images (RGB channels only).
+pub fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    assert_eq!(a.len(), b.len(), "images differ in size");
+    let (mut se, mut n) = (0.0f64, 0usize);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for c in 0..3 {
+            let d = f64::from(pa[c]) - f64::from(pb[c]);
+            se += d * d;
+            n += 1;
+        }
+    }
+    let mse = se / n.max(1) as f64;
+    if mse == 0.0 {
+        f64::INFINITY
+    } else {
+        10.0 * (255.0f64 * 255.0 / mse).log10()
+    }
+}

@@ -1,0 +1,548 @@
+//! The GPU tile rasteriser (SPEC §7), one WGSL file and one Rust type per pass:
+//!
+//! 1. [`passes::Project`] — project every Gaussian, SH colour, tile rectangle, depth key;
+//! 2. [`RadixSort`] — sort all Gaussians by depth (32-bit keys);
+//! 3. [`passes::TileKeys`] — count, scan and emit one (tile, Gaussian) pair per touched tile,
+//!    in depth order;
+//! 4. [`RadixSort`] — stable sort of the pairs by tile (only the bits the tile count needs);
+//! 5. [`passes::TileRanges`] — start/end of each tile's run;
+//! 6. [`passes::Rasterize`] — front-to-back compositing per 16×16 tile.
+//!
+//! All passes of a frame go into one command buffer; the image and a few counters are read
+//! back at the end. Buffers are kept between frames and grown only when needed.
+
+pub mod layout;
+mod passes;
+pub mod radix_sort;
+pub mod scan;
+
+use glam::Vec3;
+
+use crate::gpu::{GpuContext, GpuError};
+use crate::render::{Camera, Splats};
+use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
+use radix_sort::{RadixSort, SortBuffers, SortPlan};
+use scan::{Scan, ScanPlan};
+
+pub(crate) const COMMON: &str = include_str!("../../../shaders/common.wgsl");
+pub(crate) const SH: &str = include_str!("../../../shaders/sh.wgsl");
+
+/// Concatenate WGSL parts (WGSL has no includes).
+pub(crate) fn shader_source(parts: &[&str]) -> String {
+    parts.join("\n")
+}
+
+/// A rendered frame: RGBA8, row-major, plus what the passes counted.
+#[derive(Clone, Debug)]
+pub struct RenderedImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+    pub stats: Stats,
+    /// Tile pairs dropped because they exceeded the buffer limit (farthest Gaussians).
+    pub dropped_intersections: u32,
+}
+
+/// Wall-clock timings of one frame, in milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameTimings {
+    /// Recording + GPU execution of all render passes (until the GPU is idle).
+    pub render_ms: f64,
+    /// Copy to the readback buffer, map, and copy out.
+    pub readback_ms: f64,
+}
+
+/// Buffers that depend on the number of Gaussians.
+struct SplatBuffers {
+    count: u32,
+    sh_degree: u32,
+    gaussians: wgpu::Buffer,
+    sh_words: wgpu::Buffer,
+    projected: wgpu::Buffer,
+    tile_rects: wgpu::Buffer,
+    depth_keys: wgpu::Buffer,
+    depth_order: wgpu::Buffer,
+    depth_keys_alt: wgpu::Buffer,
+    depth_order_alt: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    depth_count: wgpu::Buffer,
+}
+
+/// Buffers that depend on the image size and the tile-pair capacity.
+struct FrameBuffers {
+    width: u32,
+    height: u32,
+    capacity: u32,
+    tile_keys: wgpu::Buffer,
+    tile_values: wgpu::Buffer,
+    tile_keys_alt: wgpu::Buffer,
+    tile_values_alt: wgpu::Buffer,
+    key_count: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    image: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    stats_readback: wgpu::Buffer,
+}
+
+/// Bind groups and sort/scan plans for the current buffers.
+struct Plans {
+    project: wgpu::BindGroup,
+    depth_sort: SortPlan,
+    gather: wgpu::BindGroup,
+    offsets_scan: ScanPlan,
+    total: wgpu::BindGroup,
+    emit: wgpu::BindGroup,
+    tile_sort: SortPlan,
+    ranges: wgpu::BindGroup,
+    rasterize: wgpu::BindGroup,
+}
+
+pub struct GpuRenderer {
+    project: passes::Project,
+    tile_keys: passes::TileKeys,
+    tile_ranges: passes::TileRanges,
+    rasterize: passes::Rasterize,
+    sort: RadixSort,
+    scan: Scan,
+    frame: wgpu::Buffer,
+    stats: wgpu::Buffer,
+    splats: Option<SplatBuffers>,
+    frame_buffers: Option<FrameBuffers>,
+    plans: Option<Plans>,
+    warned: WarnedOnce,
+}
+
+#[derive(Default)]
+struct WarnedOnce {
+    nonfinite: bool,
+    degenerate: bool,
+    overflow: bool,
+}
+
+fn storage(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(256),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC
+            | extra,
+        mapped_at_creation: false,
+    })
+}
+
+fn tile_bits(tiles: u32) -> u32 {
+    32 - tiles.saturating_sub(1).leading_zeros()
+}
+
+impl GpuRenderer {
+    pub fn new(gpu: &GpuContext) -> GpuRenderer {
+        let device = &gpu.device;
+        GpuRenderer {
+            project: passes::Project::new(device),
+            tile_keys: passes::TileKeys::new(device),
+            tile_ranges: passes::TileRanges::new(device),
+            rasterize: passes::Rasterize::new(device),
+            sort: RadixSort::new(device),
+            scan: Scan::new(device),
+            frame: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame"),
+                size: std::mem::size_of::<Frame>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            stats: storage(
+                device,
+                "stats",
+                std::mem::size_of::<Stats>() as u64,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            splats: None,
+            frame_buffers: None,
+            plans: None,
+            warned: WarnedOnce::default(),
+        }
+    }
+
+    /// Upload a set of Gaussians (replacing the previous one).
+    pub fn upload(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
+        let n = splats.len() as u64;
+        let limit = gpu.max_binding();
+        for (what, bytes) in [
+            (
+                "the Gaussians",
+                n * std::mem::size_of::<GaussianIn>() as u64,
+            ),
+            ("the SH coefficients", n * SH_WORDS as u64 * 4),
+        ] {
+            if bytes > limit {
+                return Err(GpuError::TooLarge {
+                    what: format!("{what} of {n} Gaussians"),
+                    needed: bytes,
+                    limit,
+                    advice: "render fewer Gaussians (raise the opacity threshold, or split the scene) or use a GPU with larger buffers".into(),
+                });
+            }
+        }
+        let device = &gpu.device;
+        let (gaussians, words) = layout::pack_splats(splats);
+        let usage = wgpu::BufferUsages::empty();
+        let b = SplatBuffers {
+            count: n as u32,
+            sh_degree: splats.sh_degree,
+            gaussians: storage(device, "gaussians", n * 64, usage),
+            sh_words: storage(device, "sh words", n * SH_WORDS as u64 * 4, usage),
+            projected: storage(device, "projected", n * 48, usage),
+            tile_rects: storage(device, "tile rects", n * 8, usage),
+            depth_keys: storage(device, "depth keys", n * 4, usage),
+            depth_order: storage(device, "depth order", n * 4, usage),
+            depth_keys_alt: storage(device, "depth keys alt", n * 4, usage),
+            depth_order_alt: storage(device, "depth order alt", n * 4, usage),
+            offsets: storage(device, "tile offsets", n * 4, usage),
+            depth_count: storage(device, "depth count", 4, usage),
+        };
+        gpu.queue
+            .write_buffer(&b.gaussians, 0, bytemuck::cast_slice(&gaussians));
+        gpu.queue
+            .write_buffer(&b.sh_words, 0, bytemuck::cast_slice(&words));
+        gpu.queue
+            .write_buffer(&b.depth_count, 0, bytemuck::bytes_of(&(n as u32)));
+        self.splats = Some(b);
+        self.plans = None;
+        Ok(())
+    }
+
+    /// Update the Gaussians in place (same count and SH degree): the path a simulation uses.
+    pub fn update(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
+        match &self.splats {
+            Some(b) if b.count as usize == splats.len() && b.sh_degree == splats.sh_degree => {
+                let (gaussians, words) = layout::pack_splats(splats);
+                gpu.queue
+                    .write_buffer(&b.gaussians, 0, bytemuck::cast_slice(&gaussians));
+                gpu.queue
+                    .write_buffer(&b.sh_words, 0, bytemuck::cast_slice(&words));
+                Ok(())
+            }
+            _ => self.upload(gpu, splats),
+        }
+    }
+
+    fn ensure_frame_buffers(&mut self, gpu: &GpuContext, width: u32, height: u32, capacity: u32) {
+        if let Some(f) = &self.frame_buffers {
+            if f.width == width && f.height == height && f.capacity >= capacity {
+                return;
+            }
+        }
+        let device = &gpu.device;
+        let tiles = u64::from(width.div_ceil(TILE)) * u64::from(height.div_ceil(TILE));
+        let cap = u64::from(capacity);
+        let pixels = u64::from(width) * u64::from(height);
+        let none = wgpu::BufferUsages::empty();
+        let readback = |label: &str, size: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        self.frame_buffers = Some(FrameBuffers {
+            width,
+            height,
+            capacity,
+            tile_keys: storage(device, "tile keys", cap * 4, none),
+            tile_values: storage(device, "tile values", cap * 4, none),
+            tile_keys_alt: storage(device, "tile keys alt", cap * 4, none),
+            tile_values_alt: storage(device, "tile values alt", cap * 4, none),
+            key_count: storage(device, "key count", 4, none),
+            ranges: storage(device, "tile ranges", tiles * 8, none),
+            image: storage(device, "image", pixels * 4, wgpu::BufferUsages::COPY_SRC),
+            readback: readback("image readback", pixels * 4),
+            stats_readback: readback("stats readback", std::mem::size_of::<Stats>() as u64),
+        });
+        self.plans = None;
+    }
+
+    fn ensure_plans(&mut self, gpu: &GpuContext) {
+        if self.plans.is_some() {
+            return;
+        }
+        let device = &gpu.device;
+        let s = self.splats.as_ref().expect("upload() before render()");
+        let f = self.frame_buffers.as_ref().expect("frame buffers");
+        let tiles = f.width.div_ceil(TILE) * f.height.div_ceil(TILE);
+        let depth_sort = self.sort.plan(
+            device,
+            &self.scan,
+            &SortBuffers {
+                count: &s.depth_count,
+                keys: &s.depth_keys,
+                values: &s.depth_order,
+                keys_alt: &s.depth_keys_alt,
+                values_alt: &s.depth_order_alt,
+            },
+            s.count,
+            32,
+        );
+        let tile_sort = self.sort.plan(
+            device,
+            &self.scan,
+            &SortBuffers {
+                count: &f.key_count,
+                keys: &f.tile_keys,
+                values: &f.tile_values,
+                keys_alt: &f.tile_keys_alt,
+                values_alt: &f.tile_values_alt,
+            },
+            f.capacity,
+            tile_bits(tiles),
+        );
+        self.plans = Some(Plans {
+            project: self.project.kernel.bind(
+                device,
+                &[
+                    &self.frame,
+                    &s.gaussians,
+                    &s.sh_words,
+                    &s.projected,
+                    &s.tile_rects,
+                    &s.depth_keys,
+                    &s.depth_order,
+                    &self.stats,
+                ],
+            ),
+            depth_sort,
+            gather: self.tile_keys.gather.bind(
+                device,
+                &[&self.frame, &s.tile_rects, &s.depth_order, &s.offsets],
+            ),
+            offsets_scan: self.scan.plan(device, &s.offsets, s.count),
+            total: self.tile_keys.total.bind_at(
+                device,
+                &[
+                    (0, &self.frame),
+                    (1, &s.tile_rects),
+                    (2, &s.depth_order),
+                    (3, &s.offsets),
+                    (6, &f.key_count),
+                    (7, &self.stats),
+                ],
+            ),
+            emit: self.tile_keys.emit.bind(
+                device,
+                &[
+                    &self.frame,
+                    &s.tile_rects,
+                    &s.depth_order,
+                    &s.offsets,
+                    &f.tile_keys,
+                    &f.tile_values,
+                ],
+            ),
+            tile_sort,
+            ranges: self
+                .tile_ranges
+                .kernel
+                .bind(device, &[&f.key_count, &f.tile_keys, &f.ranges]),
+            rasterize: self.rasterize.kernel.bind(
+                device,
+                &[
+                    &self.frame,
+                    &f.ranges,
+                    &f.tile_values,
+                    &s.projected,
+                    &f.image,
+                ],
+            ),
+        });
+    }
+
+    /// Render the uploaded Gaussians from `camera` over `background`.
+    pub fn render(
+        &mut self,
+        gpu: &GpuContext,
+        camera: &Camera,
+        background: Vec3,
+    ) -> Result<RenderedImage, GpuError> {
+        self.render_timed(gpu, camera, background)
+            .map(|(image, _)| image)
+    }
+
+    /// As [`render`](Self::render), also returning wall-clock timings of the passes and
+    /// of the readback.
+    pub fn render_timed(
+        &mut self,
+        gpu: &GpuContext,
+        camera: &Camera,
+        background: Vec3,
+    ) -> Result<(RenderedImage, FrameTimings), GpuError> {
+        let count = self.splats.as_ref().map_or(0, |s| s.count);
+        // Start from a guess of 8 tiles per Gaussian; grow to what a frame needed.
+        let mut capacity = self
+            .frame_buffers
+            .as_ref()
+            .map_or(0, |f| f.capacity)
+            .max(count.saturating_mul(8))
+            .max(1 << 16);
+        let max_capacity = (gpu.max_binding() / 4).min(u64::from(u32::MAX)) as u32;
+        capacity = capacity.min(max_capacity);
+        loop {
+            self.ensure_frame_buffers(gpu, camera.width, camera.height, capacity);
+            self.ensure_plans(gpu);
+            let (image, timings) = self.render_once(gpu, camera, background)?;
+            let wanted = image.stats.intersections;
+            let cap = self.frame_buffers.as_ref().map_or(0, |f| f.capacity);
+            if wanted <= cap || cap >= max_capacity {
+                let mut image = image;
+                image.dropped_intersections = wanted.saturating_sub(cap);
+                self.warn(&image);
+                return Ok((image, timings));
+            }
+            // Too many pairs for the buffers: grow with headroom and render again.
+            capacity = (u64::from(wanted) * 5 / 4).min(u64::from(max_capacity)) as u32;
+        }
+    }
+
+    fn warn(&mut self, image: &RenderedImage) {
+        let s = image.stats;
+        if s.skipped_nonfinite > 0 && !self.warned.nonfinite {
+            self.warned.nonfinite = true;
+            log::warn!(
+                "{} Gaussians skipped: NaN or Inf in mean, covariance or rotation (warned once)",
+                s.skipped_nonfinite
+            );
+        }
+        if s.skipped_degenerate > 0 && !self.warned.degenerate {
+            self.warned.degenerate = true;
+            log::warn!(
+                "{} Gaussians skipped: degenerate projected covariance (warned once)",
+                s.skipped_degenerate
+            );
+        }
+        if image.dropped_intersections > 0 && !self.warned.overflow {
+            self.warned.overflow = true;
+            log::warn!(
+                "{} of {} tile intersections exceed this adapter's buffer limit: the farthest Gaussians were dropped (warned once)",
+                image.dropped_intersections,
+                s.intersections
+            );
+        }
+    }
+
+    fn render_once(
+        &self,
+        gpu: &GpuContext,
+        camera: &Camera,
+        background: Vec3,
+    ) -> Result<(RenderedImage, FrameTimings), GpuError> {
+        let start = std::time::Instant::now();
+        let s = self.splats.as_ref().expect("upload() before render()");
+        let f = self.frame_buffers.as_ref().expect("frame buffers");
+        let p = self.plans.as_ref().expect("plans");
+        let frame = Frame::new(camera, background, s.count, s.sh_degree, f.capacity);
+        gpu.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        let mut enc = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("render"),
+            });
+        enc.clear_buffer(&self.stats, 0, None);
+        enc.clear_buffer(&f.ranges, 0, None);
+        let groups = s.count.div_ceil(256);
+        let profile = std::env::var_os("SPLATTER_PROFILE_PASSES").is_some();
+        let mark = |enc: &mut wgpu::CommandEncoder, what: &str| -> Result<(), GpuError> {
+            if profile {
+                let done =
+                    std::mem::replace(enc, gpu.device.create_command_encoder(&Default::default()));
+                let t = std::time::Instant::now();
+                gpu.queue.submit([done.finish()]);
+                gpu.wait()?;
+                eprintln!("  pass {what}: {:.2} ms", t.elapsed().as_secs_f64() * 1e3);
+            }
+            Ok(())
+        };
+        mark(&mut enc, "clear")?;
+        if s.count > 0 {
+            self.project.kernel.dispatch(&mut enc, &p.project, groups);
+            mark(&mut enc, "project")?;
+            self.sort.record(&mut enc, &self.scan, &p.depth_sort);
+            mark(&mut enc, "depth sort")?;
+            self.tile_keys.gather.dispatch(&mut enc, &p.gather, groups);
+            self.scan.record(&mut enc, &p.offsets_scan);
+            self.tile_keys.total.dispatch(&mut enc, &p.total, 1);
+            self.tile_keys.emit.dispatch(&mut enc, &p.emit, groups);
+            mark(&mut enc, "tile keys")?;
+            self.sort.record(&mut enc, &self.scan, &p.tile_sort);
+            mark(&mut enc, "tile sort")?;
+            self.tile_ranges
+                .kernel
+                .dispatch(&mut enc, &p.ranges, f.capacity.div_ceil(256));
+            mark(&mut enc, "tile ranges")?;
+        } else {
+            enc.clear_buffer(&f.key_count, 0, None);
+        }
+        self.rasterize
+            .kernel
+            .dispatch_2d(&mut enc, &p.rasterize, frame.tiles_x, frame.tiles_y);
+        mark(&mut enc, "rasterize")?;
+        gpu.queue.submit([enc.finish()]);
+        gpu.wait()?;
+        let render_ms = start.elapsed().as_secs_f64() * 1e3;
+
+        let start = std::time::Instant::now();
+        let mut enc = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("readback"),
+            });
+        enc.copy_buffer_to_buffer(&f.image, 0, &f.readback, 0, Some(f.readback.size()));
+        enc.copy_buffer_to_buffer(
+            &self.stats,
+            0,
+            &f.stats_readback,
+            0,
+            Some(f.stats_readback.size()),
+        );
+        gpu.queue.submit([enc.finish()]);
+        let rgba = read_buffer(gpu, &f.readback)?;
+        let stats_bytes = read_buffer(gpu, &f.stats_readback)?;
+        let stats: Stats = *bytemuck::from_bytes(&stats_bytes[..std::mem::size_of::<Stats>()]);
+        let readback_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok((
+            RenderedImage {
+                width: f.width,
+                height: f.height,
+                rgba,
+                stats,
+                dropped_intersections: 0,
+            },
+            FrameTimings {
+                render_ms,
+                readback_ms,
+            },
+        ))
+    }
+}
+
+/// Map a MAP_READ buffer, copy its contents out, unmap.
+pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait()?;
+    rx.recv().expect("map callback runs during poll")?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| GpuError::MapRange(e.to_string()))?
+        .to_vec();
+    buffer.unmap();
+    Ok(data)
+}

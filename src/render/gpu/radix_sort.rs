@@ -1,0 +1,144 @@
+//! Stable GPU radix sort of (key, value) pairs (`shaders/render/radix_sort.wgsl`), 4 bits
+//! per pass. The number of keys is read on the GPU from a one-element buffer, so a sort
+//! can follow a pass that decides how many keys there are without a CPU round trip.
+
+use wgpu::util::DeviceExt;
+
+use super::layout::SortParams;
+use super::scan::{Scan, ScanPlan};
+use crate::gpu::Kernel;
+
+/// Keys per workgroup (`BLOCK` in the shader).
+pub const BLOCK: u32 = 2048;
+pub const BITS_PER_PASS: u32 = 4;
+
+pub struct RadixSort {
+    count: Kernel,
+    scatter: Kernel,
+}
+
+struct Pass {
+    count_bind: wgpu::BindGroup,
+    scatter_bind: wgpu::BindGroup,
+}
+
+/// Everything needed to sort fixed buffers of a given capacity by their low `bits` bits.
+pub struct SortPlan {
+    blocks: u32,
+    /// After an odd number of passes the result is in the alternates: copy it back.
+    copy_back: Option<[(wgpu::Buffer, wgpu::Buffer); 2]>,
+    passes: Vec<Pass>,
+    scan: ScanPlan,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+/// The buffers of one sort: `keys`/`values` hold the input and the output;
+/// `keys_alt`/`values_alt` are the ping-pong partners.
+pub struct SortBuffers<'a> {
+    pub count: &'a wgpu::Buffer,
+    pub keys: &'a wgpu::Buffer,
+    pub values: &'a wgpu::Buffer,
+    pub keys_alt: &'a wgpu::Buffer,
+    pub values_alt: &'a wgpu::Buffer,
+}
+
+/// Passes for `bits` key bits.
+pub fn pass_count(bits: u32) -> u32 {
+    bits.div_ceil(BITS_PER_PASS).max(1)
+}
+
+impl RadixSort {
+    pub fn new(device: &wgpu::Device) -> RadixSort {
+        let src = include_str!("../../../shaders/render/radix_sort.wgsl");
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("radix_sort"),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        });
+        RadixSort {
+            count: Kernel::from_module(device, "radix count_digits", &module, "count_digits"),
+            scatter: Kernel::from_module(device, "radix scatter", &module, "scatter"),
+        }
+    }
+
+    pub fn plan(
+        &self,
+        device: &wgpu::Device,
+        scan: &Scan,
+        buffers: &SortBuffers,
+        capacity: u32,
+        bits: u32,
+    ) -> SortPlan {
+        let blocks = capacity.div_ceil(BLOCK).max(1);
+        let counts = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("radix digit counts"),
+            size: u64::from(blocks) * 16 * 4,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let scan_plan = scan.plan(device, &counts, blocks * 16);
+        let mut owned = Vec::new();
+        let mut passes = Vec::new();
+        for p in 0..pass_count(bits) {
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("radix params"),
+                contents: bytemuck::bytes_of(&SortParams {
+                    shift: p * BITS_PER_PASS,
+                    num_blocks: blocks,
+                    _pad: [0; 2],
+                }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let (kin, vin, kout, vout) = if p % 2 == 0 {
+                (
+                    buffers.keys,
+                    buffers.values,
+                    buffers.keys_alt,
+                    buffers.values_alt,
+                )
+            } else {
+                (
+                    buffers.keys_alt,
+                    buffers.values_alt,
+                    buffers.keys,
+                    buffers.values,
+                )
+            };
+            passes.push(Pass {
+                count_bind: self
+                    .count
+                    .bind(device, &[&params, buffers.count, kin, &counts]),
+                scatter_bind: self.scatter.bind(
+                    device,
+                    &[&params, buffers.count, kin, &counts, vin, kout, vout],
+                ),
+            });
+            owned.push(params);
+        }
+        owned.push(counts);
+        let copy_back = (pass_count(bits) % 2 == 1).then(|| {
+            [
+                (buffers.keys_alt.clone(), buffers.keys.clone()),
+                (buffers.values_alt.clone(), buffers.values.clone()),
+            ]
+        });
+        SortPlan {
+            blocks,
+            copy_back,
+            passes,
+            scan: scan_plan,
+            _buffers: owned,
+        }
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, scan: &Scan, plan: &SortPlan) {
+        for pass in &plan.passes {
+            self.count.dispatch(encoder, &pass.count_bind, plan.blocks);
+            scan.record(encoder, &plan.scan);
+            self.scatter
+                .dispatch(encoder, &pass.scatter_bind, plan.blocks);
+        }
+        for (from, to) in plan.copy_back.iter().flatten() {
+            encoder.copy_buffer_to_buffer(from, 0, to, 0, None);
+        }
+    }
+}

@@ -1,0 +1,100 @@
+//! Exclusive prefix sum on the GPU (`shaders/render/scan.wgsl`), in blocks of 1024 with
+//! recursive scans of the block sums.
+
+use wgpu::util::DeviceExt;
+
+use super::layout::ScanParams;
+use crate::gpu::Kernel;
+
+pub const BLOCK: u32 = 1024;
+
+pub struct Scan {
+    scan_blocks: Kernel,
+    add_offsets: Kernel,
+}
+
+struct Level {
+    blocks: u32,
+    scan_bind: wgpu::BindGroup,
+    add_bind: wgpu::BindGroup,
+}
+
+/// The buffers and bind groups to scan one buffer of a fixed length.
+pub struct ScanPlan {
+    levels: Vec<Level>,
+    _buffers: Vec<wgpu::Buffer>,
+}
+
+impl Scan {
+    pub fn new(device: &wgpu::Device) -> Scan {
+        let src = include_str!("../../../shaders/render/scan.wgsl");
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scan"),
+            source: wgpu::ShaderSource::Wgsl(src.into()),
+        });
+        Scan {
+            scan_blocks: Kernel::from_module(device, "scan_blocks", &module, "scan_blocks"),
+            add_offsets: Kernel::from_module(
+                device,
+                "add_block_offsets",
+                &module,
+                "add_block_offsets",
+            ),
+        }
+    }
+
+    /// Plan an in-place exclusive scan of the first `n` u32 of `data`.
+    pub fn plan(&self, device: &wgpu::Device, data: &wgpu::Buffer, n: u32) -> ScanPlan {
+        let mut levels = Vec::new();
+        let mut buffers: Vec<wgpu::Buffer> = Vec::new();
+        let mut len = n.max(1);
+        let mut current: Option<usize> = None; // index into `buffers`; None = `data`
+        loop {
+            let blocks = len.div_ceil(BLOCK);
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scan params"),
+                contents: bytemuck::bytes_of(&ScanParams {
+                    n: len,
+                    _pad: [0; 3],
+                }),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let sums = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("scan block sums"),
+                size: u64::from(blocks.max(1)) * 4,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            buffers.push(params);
+            buffers.push(sums);
+            let params = &buffers[buffers.len() - 2];
+            let sums = &buffers[buffers.len() - 1];
+            let level_data = current.map_or(data, |i| &buffers[i]);
+            levels.push(Level {
+                blocks,
+                scan_bind: self.scan_blocks.bind(device, &[params, level_data, sums]),
+                add_bind: self.add_offsets.bind(device, &[params, level_data, sums]),
+            });
+            if blocks == 1 {
+                break;
+            }
+            current = Some(buffers.len() - 1);
+            len = blocks;
+        }
+        ScanPlan {
+            levels,
+            _buffers: buffers,
+        }
+    }
+
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, plan: &ScanPlan) {
+        for level in &plan.levels {
+            self.scan_blocks
+                .dispatch(encoder, &level.scan_bind, level.blocks);
+        }
+        for level in plan.levels.iter().rev().filter(|l| l.blocks > 1) {
+            self.add_offsets
+                .dispatch(encoder, &level.add_bind, level.blocks);
+        }
+    }
+}

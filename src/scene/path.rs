@@ -1,0 +1,732 @@
+//! Camera paths: orbit, keyframes (Hermite/Catmull-Rom positions, slerp or look-at
+//! orientation) and INRIA 3DGS `cameras.json` files.
+
+use std::path::Path;
+
+use glam::{Mat3, Quat, Vec3};
+use serde::Deserialize;
+
+use super::{mat3_from_rows, rotation_problem, CamerasJsonMode, PathSpec, Scene, SceneError};
+use crate::render::camera::{focal_from_fov, look_at_rotation, Camera, DEFAULT_NEAR};
+
+/// The camera of every frame of a scene.
+#[derive(Clone, Debug)]
+pub struct CameraPath {
+    frames: u32,
+    fps: f32,
+    kind: Kind,
+}
+
+#[derive(Clone, Debug)]
+enum Kind {
+    Still(Camera),
+    /// One camera per frame; frames past the end hold the last.
+    Sequence(Vec<Camera>),
+    Orbit(Orbit),
+    Spline(Spline),
+}
+
+#[derive(Clone, Debug)]
+struct Orbit {
+    /// Intrinsics, size and near plane; position and rotation are set per frame.
+    template: Camera,
+    target: Vec3,
+    up: Vec3,
+    /// Orthonormal basis of the plane perpendicular to `up` (e1 × e2 = up).
+    e1: Vec3,
+    e2: Vec3,
+    radius: f32,
+    height: f32,
+    start: f32,
+    turns: f32,
+}
+
+impl CameraPath {
+    /// The same camera for every frame (one frame).
+    pub fn still(camera: Camera) -> CameraPath {
+        CameraPath {
+            frames: 1,
+            fps: 24.0,
+            kind: Kind::Still(camera),
+        }
+    }
+
+    /// One camera per frame, in order (frames past the end hold the last camera).
+    pub fn sequence(cameras: Vec<Camera>, fps: f32) -> CameraPath {
+        assert!(
+            !cameras.is_empty(),
+            "a camera sequence needs at least one camera"
+        );
+        CameraPath {
+            frames: cameras.len() as u32,
+            fps,
+            kind: Kind::Sequence(cameras),
+        }
+    }
+
+    /// An orbit that frames the bounding box: it circles the box centre about `up`, 20° above
+    /// the box centre, at a distance where the box's bounding sphere fills about 80% of the
+    /// narrower field of view. One turn over `frames`.
+    pub fn orbit_framing(
+        bounds: (Vec3, Vec3),
+        up: Vec3,
+        fov_y_deg: f32,
+        width: u32,
+        height: u32,
+        frames: u32,
+    ) -> CameraPath {
+        let (lo, hi) = bounds;
+        let (centre, sphere) = if lo.is_finite() && hi.is_finite() {
+            ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-3))
+        } else {
+            (Vec3::ZERO, 1.0)
+        };
+        let up = up.try_normalize().unwrap_or(Vec3::Z);
+        let fov_y_deg = if fov_y_deg.is_finite() && fov_y_deg > 0.0 && fov_y_deg < 180.0 {
+            fov_y_deg
+        } else {
+            50.0
+        };
+        let (width, height) = (width.max(1), height.max(1));
+        let fy = focal_from_fov(fov_y_deg.to_radians(), height);
+        let half_x = (width as f32 * 0.5 / fy).atan();
+        let half = half_x.min(fov_y_deg.to_radians() * 0.5);
+        let distance = sphere / half.sin() / 0.8;
+        let elevation = 20f32.to_radians();
+        let template = Camera {
+            position: Vec3::ZERO,
+            rotation: Mat3::IDENTITY,
+            fx: fy,
+            fy,
+            width,
+            height,
+            near: (distance * 1e-3).clamp(1e-4, DEFAULT_NEAR),
+        };
+        let (e1, e2) = plane_basis(up);
+        CameraPath {
+            frames: frames.max(1),
+            fps: 24.0,
+            kind: Kind::Orbit(Orbit {
+                template,
+                target: centre,
+                up,
+                e1,
+                e2,
+                radius: distance * elevation.cos(),
+                height: distance * elevation.sin(),
+                start: 0.0,
+                turns: 1.0,
+            }),
+        }
+    }
+
+    /// Number of frames the path was made for.
+    pub fn frames(&self) -> u32 {
+        self.frames
+    }
+
+    /// Frames per second (frame f is at time f / fps).
+    pub fn fps(&self) -> f32 {
+        self.fps
+    }
+
+    /// The camera of frame `frame`.
+    pub fn camera(&self, frame: u32) -> Camera {
+        match &self.kind {
+            Kind::Spline(s) => s.eval(frame as f32 / self.fps),
+            _ => self.camera_at_frame(frame as f32),
+        }
+    }
+
+    /// The camera at time `seconds` (frame f is at time f / fps; a sequence holds each camera
+    /// for a whole frame).
+    pub fn camera_at_time(&self, seconds: f32) -> Camera {
+        match &self.kind {
+            Kind::Spline(s) => s.eval(seconds),
+            _ => self.camera_at_frame(seconds * self.fps),
+        }
+    }
+
+    fn camera_at_frame(&self, frame: f32) -> Camera {
+        match &self.kind {
+            Kind::Still(c) => *c,
+            Kind::Sequence(cams) => {
+                let i = if frame.is_finite() && frame > 0.0 {
+                    frame.floor() as usize
+                } else {
+                    0
+                };
+                cams[i.min(cams.len() - 1)]
+            }
+            Kind::Orbit(o) => {
+                let angle =
+                    o.start + std::f32::consts::TAU * o.turns * frame / self.frames.max(1) as f32;
+                let position = o.target
+                    + o.up * o.height
+                    + o.radius * (angle.cos() * o.e1 + angle.sin() * o.e2);
+                Camera {
+                    position,
+                    rotation: look_at_rotation(position, o.target, o.up),
+                    ..o.template
+                }
+            }
+            Kind::Spline(s) => s.eval(frame / self.fps),
+        }
+    }
+}
+
+/// A unit vector basis (e1, e2) of the plane perpendicular to unit `up`, with e1 × e2 = up and
+/// e1 as close to +x as possible (so that for +z up, angle 0 is +x and angles turn toward +y).
+fn plane_basis(up: Vec3) -> (Vec3, Vec3) {
+    let mut e1 = Vec3::X - up * up.dot(Vec3::X);
+    if e1.length_squared() < 1e-6 {
+        e1 = Vec3::Y - up * up.dot(Vec3::Y);
+    }
+    let e1 = e1.normalize();
+    (e1, up.cross(e1))
+}
+
+/// See [`CameraPath::orbit_framing`].
+pub fn orbit_framing(
+    bounds: (Vec3, Vec3),
+    up: Vec3,
+    fov_y_deg: f32,
+    width: u32,
+    height: u32,
+    frames: u32,
+) -> CameraPath {
+    CameraPath::orbit_framing(bounds, up, fov_y_deg, width, height, frames)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Keyframe splines
+// ---------------------------------------------------------------------------------------------
+
+/// A C1 cubic Hermite spline through (time, point) knots. Interior tangents are those of
+/// Catmull-Rom generalised to non-uniform times: the derivative of the parabola through the
+/// knot and its two neighbours; end tangents are the end secants (the curve is "extended"
+/// linearly at its ends). Outside the knot range the end points hold.
+#[derive(Clone, Debug)]
+struct Hermite {
+    times: Vec<f32>,
+    points: Vec<Vec3>,
+    tangents: Vec<Vec3>,
+}
+
+impl Hermite {
+    fn new(times: Vec<f32>, points: Vec<Vec3>) -> Hermite {
+        let n = points.len();
+        let secant = |i: usize| (points[i + 1] - points[i]) / (times[i + 1] - times[i]);
+        let tangents = (0..n)
+            .map(|i| {
+                if n == 1 {
+                    Vec3::ZERO
+                } else if i == 0 {
+                    secant(0)
+                } else if i == n - 1 {
+                    secant(n - 2)
+                } else {
+                    let (h0, h1) = (times[i] - times[i - 1], times[i + 1] - times[i]);
+                    (secant(i - 1) * h1 + secant(i) * h0) / (h0 + h1)
+                }
+            })
+            .collect();
+        Hermite {
+            times,
+            points,
+            tangents,
+        }
+    }
+
+    fn eval(&self, seg: Segment) -> Vec3 {
+        match seg {
+            Segment::At(i) => self.points[i],
+            Segment::Between(i, u) => {
+                let h = self.times[i + 1] - self.times[i];
+                let (u2, u3) = (u * u, u * u * u);
+                let h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+                let h10 = u3 - 2.0 * u2 + u;
+                let h01 = -2.0 * u3 + 3.0 * u2;
+                let h11 = u3 - u2;
+                self.points[i] * h00
+                    + self.tangents[i] * (h10 * h)
+                    + self.points[i + 1] * h01
+                    + self.tangents[i + 1] * (h11 * h)
+            }
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Segment {
+    /// Exactly at (or clamped to) knot i.
+    At(usize),
+    /// In (knot i, knot i + 1) at fraction u ∈ (0, 1).
+    Between(usize, f32),
+}
+
+fn locate(times: &[f32], t: f32) -> Segment {
+    let n = times.len();
+    if n == 1 || t.is_nan() || t <= times[0] {
+        return Segment::At(0);
+    }
+    if t >= times[n - 1] {
+        return Segment::At(n - 1);
+    }
+    // First knot with time > t; t ≥ times[0] so i ≥ 1.
+    let i = times.partition_point(|&k| k <= t) - 1;
+    if t == times[i] {
+        return Segment::At(i);
+    }
+    Segment::Between(i, (t - times[i]) / (times[i + 1] - times[i]))
+}
+
+#[derive(Clone, Debug)]
+enum Orientation {
+    /// Slerp between neighbouring keyframes' rotations.
+    Slerp(Vec<Quat>),
+    /// A look-at target interpolated like the positions.
+    LookAt(Hermite),
+}
+
+#[derive(Clone, Debug)]
+struct Spline {
+    template: Camera,
+    up: Vec3,
+    positions: Hermite,
+    orientation: Orientation,
+    /// Per-keyframe focal lengths (fx, fy), interpolated linearly; empty: the template's.
+    focals: Vec<(f32, f32)>,
+}
+
+impl Spline {
+    fn eval(&self, t: f32) -> Camera {
+        let seg = locate(&self.positions.times, t);
+        let position = self.positions.eval(seg);
+        let rotation = match &self.orientation {
+            Orientation::LookAt(targets) => look_at_rotation(position, targets.eval(seg), self.up),
+            Orientation::Slerp(qs) => Mat3::from_quat(match seg {
+                Segment::At(i) => qs[i],
+                Segment::Between(i, u) => qs[i].slerp(qs[i + 1], u).normalize(),
+            }),
+        };
+        let (fx, fy) = match (self.focals.is_empty(), seg) {
+            (true, _) => (self.template.fx, self.template.fy),
+            (false, Segment::At(i)) => self.focals[i],
+            (false, Segment::Between(i, u)) => {
+                let (a, b) = (self.focals[i], self.focals[i + 1]);
+                (a.0 + (b.0 - a.0) * u, a.1 + (b.1 - a.1) * u)
+            }
+        };
+        Camera {
+            position,
+            rotation,
+            fx,
+            fy,
+            ..self.template
+        }
+    }
+}
+
+/// A keyframe in world terms, for building splines.
+struct Key {
+    time: f32,
+    position: Vec3,
+    look_at: Option<Vec3>,
+    rotation: Option<Mat3>,
+    focal: Option<(f32, f32)>,
+}
+
+fn spline(template: Camera, up: Vec3, keys: &[Key]) -> Spline {
+    let times: Vec<f32> = keys.iter().map(|k| k.time).collect();
+    let positions = Hermite::new(times.clone(), keys.iter().map(|k| k.position).collect());
+    let orientation = match keys
+        .iter()
+        .map(|k| k.look_at)
+        .collect::<Option<Vec<Vec3>>>()
+    {
+        Some(targets) => Orientation::LookAt(Hermite::new(times, targets)),
+        None => Orientation::Slerp(
+            keys.iter()
+                .map(|k| {
+                    let r = k.rotation.unwrap_or_else(|| {
+                        look_at_rotation(k.position, k.look_at.unwrap_or(Vec3::ZERO), up)
+                    });
+                    Quat::from_mat3(&r).normalize()
+                })
+                .collect(),
+        ),
+    };
+    let focals = keys
+        .iter()
+        .map(|k| k.focal)
+        .collect::<Option<Vec<_>>>()
+        .unwrap_or_default();
+    Spline {
+        template,
+        up,
+        positions,
+        orientation,
+        focals,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// cameras.json
+// ---------------------------------------------------------------------------------------------
+
+/// One entry of an INRIA 3DGS `cameras.json`.
+#[derive(Clone, Debug, Deserialize)]
+struct CameraEntry {
+    #[serde(default)]
+    #[allow(dead_code)]
+    id: Option<serde_json::Value>,
+    #[serde(default)]
+    #[allow(dead_code)]
+    img_name: Option<String>,
+    width: u32,
+    height: u32,
+    position: [f32; 3],
+    rotation: [[f32; 3]; 3],
+    fx: f32,
+    fy: f32,
+}
+
+/// Read and check a `cameras.json`: non-empty, positive sizes and focal lengths, finite
+/// positions, rotations orthonormal (within 1e-3; re-orthonormalised when off by more than
+/// 1e-5, used as they are otherwise).
+fn read_cameras_json(path: &Path) -> Result<Vec<(CameraEntry, Mat3)>, SceneError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let entries: Vec<CameraEntry> =
+        serde_json::from_str(&text).map_err(|e| SceneError::parse(&origin, &e))?;
+    if entries.is_empty() {
+        return Err(SceneError::invalid(
+            &origin,
+            "[]",
+            "an empty array",
+            "at least one camera",
+        ));
+    }
+    let mut out = Vec::with_capacity(entries.len());
+    for (i, e) in entries.into_iter().enumerate() {
+        let f = |name: &str| format!("[{i}].{name}");
+        for (name, v) in [("width", e.width), ("height", e.height)] {
+            if v == 0 {
+                return Err(SceneError::invalid(
+                    &origin,
+                    f(name),
+                    v,
+                    "a size in pixels ≥ 1",
+                ));
+            }
+        }
+        super::check_positive(&origin, &f("fx"), e.fx)?;
+        super::check_positive(&origin, &f("fy"), e.fy)?;
+        super::check_finite3(&origin, &f("position"), e.position)?;
+        let r = mat3_from_rows(e.rotation);
+        if let Some(problem) = rotation_problem(r, 1e-3) {
+            return Err(SceneError::invalid(
+                &origin,
+                f("rotation"),
+                format!("{:?}", e.rotation),
+                problem,
+            ));
+        }
+        let r = if rotation_problem(r, 1e-5).is_some() {
+            orthonormalise(r)
+        } else {
+            r
+        };
+        out.push((e, r));
+    }
+    Ok(out)
+}
+
+/// Gram-Schmidt on the columns (keeps the z = view axis exactly).
+fn orthonormalise(r: Mat3) -> Mat3 {
+    let z = r.z_axis.normalize();
+    let x = (r.x_axis - z * z.dot(r.x_axis)).normalize();
+    Mat3::from_cols(x, z.cross(x), z)
+}
+
+/// Output size for a file camera of size (w, h): the given ones, the missing one following
+/// the camera's aspect ratio.
+fn output_size(w: u32, h: u32, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
+    let aspect = w as f64 / h as f64;
+    match (width, height) {
+        (Some(a), Some(b)) => (a, b),
+        (Some(a), None) => (a, ((a as f64 / aspect).round() as u32).max(1)),
+        (None, Some(b)) => (((b as f64 * aspect).round() as u32).max(1), b),
+        (None, None) => (w, h),
+    }
+}
+
+/// The cameras of an INRIA 3DGS `cameras.json` (array of {id, img_name, width, height,
+/// position, rotation (camera-to-world rows), fx, fy}), at the given output size (`None`: the
+/// file's; one of the two: the other keeps each camera's aspect ratio). Focal lengths are
+/// rescaled to the output size (fx·W/width, fy·H/height); position and rotation are used as
+/// they are.
+pub fn from_cameras_json(
+    path: &Path,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<Vec<Camera>, SceneError> {
+    let origin = path.display().to_string();
+    for (name, v) in [("width", width), ("height", height)] {
+        if let Some(v) = v {
+            if !(1..=super::MAX_IMAGE_SIZE).contains(&v) {
+                return Err(SceneError::invalid(
+                    &origin,
+                    format!("requested {name}"),
+                    v,
+                    format!("1..={}", super::MAX_IMAGE_SIZE),
+                ));
+            }
+        }
+    }
+    Ok(read_cameras_json(path)?
+        .into_iter()
+        .map(|(e, rotation)| {
+            let (w, h) = output_size(e.width, e.height, width, height);
+            Camera {
+                position: Vec3::from_array(e.position),
+                rotation,
+                fx: e.fx * w as f32 / e.width as f32,
+                fy: e.fy * h as f32 / e.height as f32,
+                width: w,
+                height: h,
+                near: DEFAULT_NEAR,
+            }
+        })
+        .collect())
+}
+
+// ---------------------------------------------------------------------------------------------
+// From a scene
+// ---------------------------------------------------------------------------------------------
+
+pub(super) fn build(scene: &Scene) -> Result<CameraPath, SceneError> {
+    let out = &scene.output;
+    let cam = &scene.camera;
+    let (width, height) = (out.width, out.height);
+    let up = Vec3::from_array(cam.up).try_normalize().unwrap_or(Vec3::Z);
+    // Intrinsics the scene sets itself, in output pixels.
+    let scene_focal = match (cam.fov_y_deg, cam.fx, cam.fy) {
+        (Some(fov), _, _) => {
+            let f = focal_from_fov(fov.to_radians(), height);
+            Some((f, f))
+        }
+        (None, Some(fx), Some(fy)) => Some((fx, fy)),
+        _ => None,
+    };
+    let template = |(fx, fy): (f32, f32)| Camera {
+        position: Vec3::ZERO,
+        rotation: Mat3::IDENTITY,
+        fx,
+        fy,
+        width,
+        height,
+        near: cam.near,
+    };
+    let missing_intrinsics = || {
+        SceneError::invalid(
+            &scene.origin,
+            "camera",
+            "no intrinsics",
+            "`fov_y_deg` (degrees) or `fx` and `fy` (pixels)",
+        )
+    };
+    let kind = match &cam.path {
+        PathSpec::Orbit(o) => {
+            let (e1, e2) = plane_basis(up);
+            Kind::Orbit(Orbit {
+                template: template(scene_focal.ok_or_else(missing_intrinsics)?),
+                target: Vec3::from_array(o.target),
+                up,
+                e1,
+                e2,
+                radius: o.radius,
+                height: o.height,
+                start: o.start_deg.to_radians(),
+                turns: o.turns,
+            })
+        }
+        PathSpec::Keyframes(k) => {
+            let keys: Vec<Key> = k
+                .keyframes
+                .iter()
+                .map(|k| Key {
+                    time: k.time,
+                    position: Vec3::from_array(k.position),
+                    look_at: k.look_at.map(Vec3::from_array),
+                    rotation: k.rotation.map(mat3_from_rows),
+                    focal: None,
+                })
+                .collect();
+            Kind::Spline(spline(
+                template(scene_focal.ok_or_else(missing_intrinsics)?),
+                up,
+                &keys,
+            ))
+        }
+        PathSpec::CamerasJson(c) => {
+            let file = scene.base_dir.join(&c.file);
+            let cams = from_cameras_json(&file, Some(width), Some(height))?;
+            let with_scene_focal = |c: Camera| match scene_focal {
+                Some((fx, fy)) => Camera {
+                    fx,
+                    fy,
+                    near: cam.near,
+                    ..c
+                },
+                None => Camera {
+                    near: cam.near,
+                    ..c
+                },
+            };
+            match c.mode {
+                CamerasJsonMode::Each => {
+                    if out.frames as usize > cams.len() {
+                        return Err(SceneError::invalid(
+                            &scene.origin,
+                            "output.frames",
+                            out.frames,
+                            format!(
+                                "at most {} (the number of cameras in {}) with mode \"each\"; use mode \"smooth\" to interpolate",
+                                cams.len(),
+                                file.display()
+                            ),
+                        ));
+                    }
+                    Kind::Sequence(
+                        cams.into_iter()
+                            .take(out.frames as usize)
+                            .map(with_scene_focal)
+                            .collect(),
+                    )
+                }
+                CamerasJsonMode::Smooth => {
+                    let n = cams.len();
+                    if n == 1 || out.frames == 1 {
+                        Kind::Still(with_scene_focal(cams[0]))
+                    } else {
+                        let last = (out.frames - 1) as f64;
+                        let keys: Vec<Key> = cams
+                            .iter()
+                            .enumerate()
+                            .map(|(i, c)| Key {
+                                // The same arithmetic as `camera(frame)`: frame / fps in f32.
+                                time: (i as f64 * last / (n - 1) as f64) as f32 / out.fps,
+                                position: c.position,
+                                look_at: None,
+                                rotation: Some(c.rotation),
+                                focal: Some(scene_focal.unwrap_or((c.fx, c.fy))),
+                            })
+                            .collect();
+                        // Keep times strictly increasing even for very many cameras per frame.
+                        if keys.windows(2).any(|w| w[1].time <= w[0].time) {
+                            return Err(SceneError::invalid(
+                                &scene.origin,
+                                "output.frames",
+                                out.frames,
+                                format!("enough frames to spread {n} cameras over (times collide)"),
+                            ));
+                        }
+                        Kind::Spline(spline(template((cams[0].fx, cams[0].fy)), up, &keys))
+                    }
+                }
+            }
+        }
+    };
+    Ok(CameraPath {
+        frames: out.frames,
+        fps: out.fps,
+        kind,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locate_finds_segments() {
+        let t = [0.0, 1.0, 3.0];
+        assert!(matches!(locate(&t, -1.0), Segment::At(0)));
+        assert!(matches!(locate(&t, 0.0), Segment::At(0)));
+        assert!(matches!(locate(&t, 1.0), Segment::At(1)));
+        assert!(matches!(locate(&t, 5.0), Segment::At(2)));
+        match locate(&t, 2.0) {
+            Segment::Between(1, u) => assert!((u - 0.5).abs() < 1e-6),
+            s => panic!("{s:?}"),
+        }
+    }
+
+    #[test]
+    fn hermite_reproduces_a_straight_line_at_constant_speed() {
+        let h = Hermite::new(
+            vec![0.0, 1.0, 3.0, 3.5],
+            vec![Vec3::ZERO, Vec3::X, Vec3::X * 3.0, Vec3::X * 3.5],
+        );
+        for k in 0..=35 {
+            let t = k as f32 * 0.1;
+            let p = h.eval(locate(&h.times, t));
+            assert!((p.x - t).abs() < 1e-5 && p.y == 0.0, "{t}: {p}");
+        }
+    }
+
+    #[test]
+    fn plane_basis_is_right_handed_about_up() {
+        for up in [
+            Vec3::Z,
+            Vec3::Y,
+            Vec3::new(0.3, -0.2, 0.9).normalize(),
+            Vec3::X,
+        ] {
+            let (e1, e2) = plane_basis(up);
+            assert!(e1.dot(up).abs() < 1e-6 && e2.dot(up).abs() < 1e-6 && e1.dot(e2).abs() < 1e-6);
+            assert!((e1.cross(e2) - up).length() < 1e-5);
+        }
+        assert_eq!(plane_basis(Vec3::Z), (Vec3::X, Vec3::Y));
+    }
+
+    #[test]
+    fn orbit_framing_sees_the_whole_box() {
+        let bounds = (Vec3::new(-1.0, -2.0, 0.0), Vec3::new(3.0, 2.0, 1.0));
+        let path = CameraPath::orbit_framing(bounds, Vec3::Z, 45.0, 320, 180, 12);
+        for f in 0..12 {
+            let c = path.camera(f);
+            assert!(c.position.z > 0.5, "above the centre");
+            for corner in 0..8 {
+                let p = Vec3::new(
+                    if corner & 1 == 0 {
+                        bounds.0.x
+                    } else {
+                        bounds.1.x
+                    },
+                    if corner & 2 == 0 {
+                        bounds.0.y
+                    } else {
+                        bounds.1.y
+                    },
+                    if corner & 4 == 0 {
+                        bounds.0.z
+                    } else {
+                        bounds.1.z
+                    },
+                );
+                let q = c.world_to_camera() * (p - c.position);
+                assert!(q.z > c.near);
+                let (u, v) = (c.fx * q.x / q.z + 160.0, c.fy * q.y / q.z + 90.0);
+                assert!(
+                    (0.0..320.0).contains(&u) && (0.0..180.0).contains(&v),
+                    "frame {f} corner {corner}: {u} {v}"
+                );
+            }
+        }
+    }
+}

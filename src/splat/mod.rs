@@ -1,0 +1,144 @@
+//! Gaussian clouds: the in-memory representation, PLY input/output, spherical harmonics,
+//! and procedural objects (SPEC §1, §5).
+
+pub mod ply;
+pub mod procedural;
+pub mod sh;
+
+use glam::{Mat3, Quat, Vec3};
+
+/// A set of 3D Gaussians, stored as a struct of arrays.
+///
+/// Everything is in *linear* (activated) form: `opacities` are in (0, 1] (the PLY's logit
+/// has been through a sigmoid), `scales` are standard deviations (the PLY's log has been
+/// through exp), `rotations` are unit quaternions. The rest covariance of Gaussian p is
+/// A_p = R S Sᵀ Rᵀ with R = rotation, S = diag(scale) (SPEC §1).
+///
+/// Spherical-harmonic coefficients are stored coefficient-major per Gaussian:
+/// `sh[p * K * 3 + k * 3 + c]` is coefficient k (0 = DC) of colour channel c, with
+/// K = (degree + 1)². (The PLY file is channel-major for the rest coefficients; the
+/// reader and writer convert.)
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GaussianCloud {
+    pub positions: Vec<Vec3>,
+    pub scales: Vec<Vec3>,
+    pub rotations: Vec<Quat>,
+    pub opacities: Vec<f32>,
+    /// Degree of the spherical harmonics, 0..=3.
+    pub sh_degree: u32,
+    pub sh: Vec<f32>,
+    /// Optional per-Gaussian normals (PLY `nx ny nz`); empty when absent.
+    pub normals: Vec<Vec3>,
+}
+
+/// Number of SH coefficients per colour channel for a degree.
+pub const fn sh_coeff_count(degree: u32) -> usize {
+    ((degree + 1) * (degree + 1)) as usize
+}
+
+impl GaussianCloud {
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+
+    /// Coefficients per Gaussian (all three channels).
+    pub fn sh_stride(&self) -> usize {
+        sh_coeff_count(self.sh_degree) * 3
+    }
+
+    /// The SH coefficients of Gaussian `i`, coefficient-major (`[k * 3 + c]`).
+    pub fn sh_of(&self, i: usize) -> &[f32] {
+        let s = self.sh_stride();
+        &self.sh[i * s..(i + 1) * s]
+    }
+
+    /// Rest covariance A = R S Sᵀ Rᵀ of Gaussian `i`.
+    pub fn covariance(&self, i: usize) -> Mat3 {
+        let r = Mat3::from_quat(self.rotations[i]);
+        let s = Mat3::from_diagonal(self.scales[i]);
+        let m = r * s;
+        m * m.transpose()
+    }
+
+    /// Axis-aligned bounds of the means, `None` when empty.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let first = *self.positions.first()?;
+        Some(
+            self.positions
+                .iter()
+                .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p))),
+        )
+    }
+
+    /// Raise the SH degree to `degree` by padding with zero coefficients (no-op if the
+    /// cloud already has that degree or higher).
+    pub fn pad_sh_degree(&mut self, degree: u32) {
+        if degree <= self.sh_degree {
+            return;
+        }
+        let old = self.sh_stride();
+        let new = sh_coeff_count(degree) * 3;
+        let mut sh = vec![0.0; self.len() * new];
+        for i in 0..self.len() {
+            sh[i * new..i * new + old].copy_from_slice(&self.sh[i * old..(i + 1) * old]);
+        }
+        self.sh = sh;
+        self.sh_degree = degree;
+    }
+
+    /// Append another cloud; the result has the larger of the two SH degrees.
+    pub fn append(&mut self, mut other: GaussianCloud) {
+        let degree = self.sh_degree.max(other.sh_degree);
+        if self.is_empty() {
+            self.sh_degree = degree;
+        }
+        self.pad_sh_degree(degree);
+        other.pad_sh_degree(degree);
+        let keep_normals = self.normals.len() == self.len() && other.normals.len() == other.len();
+        self.positions.extend(other.positions);
+        self.scales.extend(other.scales);
+        self.rotations.extend(other.rotations);
+        self.opacities.extend(other.opacities);
+        self.sh.extend(other.sh);
+        if keep_normals {
+            self.normals.extend(other.normals);
+        } else {
+            self.normals.clear();
+        }
+    }
+
+    /// Check the struct-of-arrays invariants (equal lengths, SH length, degree range).
+    pub fn check_consistent(&self) -> Result<(), String> {
+        let n = self.len();
+        if self.sh_degree > 3 {
+            return Err(format!("SH degree {} is above 3", self.sh_degree));
+        }
+        for (name, len) in [
+            ("scales", self.scales.len()),
+            ("rotations", self.rotations.len()),
+            ("opacities", self.opacities.len()),
+        ] {
+            if len != n {
+                return Err(format!("{name} has {len} entries for {n} Gaussians"));
+            }
+        }
+        if self.sh.len() != n * self.sh_stride() {
+            return Err(format!(
+                "sh has {} values, expected {}",
+                self.sh.len(),
+                n * self.sh_stride()
+            ));
+        }
+        if !self.normals.is_empty() && self.normals.len() != n {
+            return Err(format!(
+                "normals has {} entries for {n} Gaussians",
+                self.normals.len()
+            ));
+        }
+        Ok(())
+    }
+}

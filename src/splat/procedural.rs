@@ -1,0 +1,542 @@
+//! Procedural Gaussian objects (sphere, box, cylinder, ground slab), so that scenes and
+//! tests need no downloaded captures. Each object is a jittered lattice of isotropic
+//! Gaussians filling the solid, coloured per region: `shells` by depth below the surface
+//! (outermost first), the `color` for everything deeper.
+
+use glam::{Quat, Vec3};
+use rayon::prelude::*;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::sh::rgb_to_dc;
+use super::GaussianCloud;
+
+/// The solid to fill. All shapes are centred on the object's origin; the slab's top face is
+/// at z = 0 (z is up) so that it can serve as a ground.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "shape", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Shape {
+    Sphere {
+        radius: f32,
+    },
+    Box {
+        size: [f32; 3],
+    },
+    /// Axis along z.
+    Cylinder {
+        radius: f32,
+        height: f32,
+    },
+    /// A thin box whose top face is z = 0: `size` is its extent in x and y.
+    Slab {
+        size: [f32; 2],
+        thickness: f32,
+    },
+}
+
+/// A layer of the solid within `depth` of the surface (measured from the previous shell).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Shell {
+    pub depth: f32,
+    pub color: [f32; 3],
+}
+
+fn default_opacity() -> f32 {
+    0.95
+}
+fn default_jitter() -> f32 {
+    0.25
+}
+
+/// A procedural object as it appears in a scene file.
+///
+/// No `deny_unknown_fields` here: serde does not support it together with `flatten` (every
+/// spec would fail with "unknown field `shape`"). Unknown fields are still refused, because
+/// serde hands the fields this struct does not know to the flattened [`Shape`], which
+/// denies them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ProceduralSpec {
+    #[serde(flatten)]
+    pub shape: Shape,
+    /// Lattice spacing: distance between neighbouring Gaussians.
+    pub spacing: f32,
+    /// Colour (linear RGB in [0, 1]) of the core, below all shells.
+    pub color: [f32; 3],
+    /// Surface layers, outermost first.
+    #[serde(default)]
+    pub shells: Vec<Shell>,
+    /// A checkerboard on the top face region (period in world units) — used for grounds.
+    #[serde(default)]
+    pub checker: Option<Checker>,
+    #[serde(default = "default_opacity")]
+    pub opacity: f32,
+    /// Random offset of each lattice point, as a fraction of `spacing`.
+    #[serde(default = "default_jitter")]
+    pub jitter: f32,
+    #[serde(default)]
+    pub seed: u64,
+}
+
+/// Alternating colour squares of side `period` (in x and y), replacing `color` and shells.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Checker {
+    pub period: f32,
+    pub colors: [[f32; 3]; 2],
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum ProceduralError {
+    #[error("field `{field}` = {value}: {expected}")]
+    Invalid {
+        field: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+    #[error("{count} Gaussians would be generated (spacing {spacing} is too fine for the shape); at most {max} are allowed")]
+    TooMany { count: u64, spacing: f32, max: u64 },
+}
+
+/// Largest procedural object we agree to generate.
+pub const MAX_PROCEDURAL_GAUSSIANS: u64 = 50_000_000;
+
+/// Standard deviation of every procedural Gaussian, as a multiple of `spacing`.
+///
+/// 0.6 makes the solid read as opaque without visible blobs: halfway between two lattice
+/// neighbours each Gaussian still reaches exp(−(0.5/0.6)²/2) ≈ 0.71 of its opacity, and at
+/// the centre of a lattice square ≈ 0.5, so one lattice layer already covers ≥ 90 % of the
+/// surface at the default opacity and the layer below closes the rest; yet the visible
+/// footprint (≈ 2σ = 1.2 spacings) barely reaches past the nearest neighbours, so single
+/// Gaussians do not stand out as bumps on the silhouette.
+pub const SCALE_PER_SPACING: f32 = 0.6;
+
+impl ProceduralSpec {
+    /// Check every field (sizes > 0, colours finite, opacity in (0, 1], …).
+    pub fn validate(&self) -> Result<(), ProceduralError> {
+        match &self.shape {
+            Shape::Sphere { radius } => positive("radius", *radius)?,
+            Shape::Box { size } => positive_all("size", size)?,
+            Shape::Cylinder { radius, height } => {
+                positive("radius", *radius)?;
+                positive("height", *height)?;
+            }
+            Shape::Slab { size, thickness } => {
+                positive_all("size", size)?;
+                positive("thickness", *thickness)?;
+            }
+        }
+        positive("spacing", self.spacing)?;
+        unit_color("color", &self.color)?;
+        for (i, shell) in self.shells.iter().enumerate() {
+            // Past the table of static names the field is generic and `value` names the index.
+            let (depth_field, color_field) = shell_fields(i);
+            if !(shell.depth.is_finite() && shell.depth > 0.0) {
+                let value = match depth_field {
+                    Some(_) => shell.depth.to_string(),
+                    None => format!("shells[{i}].depth = {}", shell.depth),
+                };
+                return Err(invalid(
+                    depth_field.unwrap_or("shells[].depth"),
+                    value,
+                    POSITIVE,
+                ));
+            }
+            if !color_ok(&shell.color) {
+                let value = match color_field {
+                    Some(_) => format!("{:?}", shell.color),
+                    None => format!("shells[{i}].color = {:?}", shell.color),
+                };
+                return Err(invalid(
+                    color_field.unwrap_or("shells[].color"),
+                    value,
+                    UNIT,
+                ));
+            }
+        }
+        if let Some(checker) = &self.checker {
+            positive("checker.period", checker.period)?;
+            unit_color("checker.colors[0]", &checker.colors[0])?;
+            unit_color("checker.colors[1]", &checker.colors[1])?;
+        }
+        if !(self.opacity.is_finite() && self.opacity > 0.0 && self.opacity <= 1.0) {
+            return Err(invalid(
+                "opacity",
+                self.opacity.to_string(),
+                "a number in (0, 1]",
+            ));
+        }
+        if !(self.jitter.is_finite() && (0.0..=0.5).contains(&self.jitter)) {
+            return Err(invalid(
+                "jitter",
+                self.jitter.to_string(),
+                "a number in [0, 0.5]",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Generate the Gaussians (SH degree 0, colour stored as the DC coefficient).
+    ///
+    /// A cubic lattice of pitch `spacing` fills the solid (for boxes, slabs and the
+    /// cylinder's height the pitch is adjusted so that a whole number of cells fits, with
+    /// points at cell centres; spheres and the cylinder's cross-section use the lattice
+    /// through the origin, so a shape smaller than `spacing` still gets one Gaussian).
+    /// Every point moves by a uniform random offset of up to `jitter · spacing` per axis and
+    /// is then clamped back into the solid. Gaussians are isotropic with standard deviation
+    /// [`SCALE_PER_SPACING`] · `spacing`, identity rotation and the spec's opacity. The
+    /// result depends only on the spec (the seed included), not on the thread count.
+    pub fn generate(&self) -> Result<GaussianCloud, ProceduralError> {
+        self.validate()?;
+        let estimate = self.estimated_count();
+        if estimate.is_nan() || estimate > MAX_PROCEDURAL_GAUSSIANS as f64 {
+            return Err(ProceduralError::TooMany {
+                // `as` saturates (and maps NaN to 0, which validate() has ruled out).
+                count: estimate as u64,
+                spacing: self.spacing,
+                max: MAX_PROCEDURAL_GAUSSIANS,
+            });
+        }
+
+        let s = f64::from(self.spacing);
+        let solid = Solid::new(&self.shape);
+        let [ax, ay, az] = solid.axes(s);
+        let jitter = f64::from(self.jitter) * s;
+        let colors = self.region_colors();
+
+        let layers: Vec<(Vec<Vec3>, Vec<f32>)> = (0..az.count)
+            .into_par_iter()
+            .map(|iz| {
+                let mut rng =
+                    SplitMix64::new(self.seed ^ (iz as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+                let mut pos = Vec::new();
+                let mut sh = Vec::new();
+                let z = az.coord(iz);
+                for iy in 0..ay.count {
+                    let y = ay.coord(iy);
+                    for ix in 0..ax.count {
+                        let x = ax.coord(ix);
+                        if !solid.contains_lattice(x, y, z) {
+                            continue;
+                        }
+                        let mut p = [x, y, z];
+                        for c in &mut p {
+                            *c += (2.0 * rng.uniform() - 1.0) * jitter;
+                        }
+                        let p = solid.clamp(p);
+                        let dc = self.color_at(&colors, &solid, p);
+                        pos.push(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32));
+                        sh.extend_from_slice(&dc);
+                    }
+                }
+                (pos, sh)
+            })
+            .collect();
+
+        let n: usize = layers.iter().map(|l| l.0.len()).sum();
+        let mut cloud = GaussianCloud {
+            positions: Vec::with_capacity(n),
+            scales: vec![Vec3::splat(SCALE_PER_SPACING * self.spacing); n],
+            rotations: vec![Quat::IDENTITY; n],
+            opacities: vec![self.opacity; n],
+            sh_degree: 0,
+            sh: Vec::with_capacity(3 * n),
+            normals: Vec::new(),
+        };
+        for (pos, sh) in layers {
+            cloud.positions.extend(pos);
+            cloud.sh.extend(sh);
+        }
+        Ok(cloud)
+    }
+
+    /// An upper estimate of the number of Gaussians `generate` makes (no allocation).
+    pub fn estimated_count(&self) -> f64 {
+        let s = f64::from(self.spacing);
+        let fitted = |l: f32| (f64::from(l) / s).round().max(1.0);
+        match &self.shape {
+            // Lattice points within r of the origin lie in cells within r + √3/2·s.
+            Shape::Sphere { radius } => {
+                4.0 / 3.0 * std::f64::consts::PI * (f64::from(*radius) / s + 0.87).powi(3)
+            }
+            Shape::Box { size } => size.iter().map(|&l| fitted(l)).product(),
+            Shape::Cylinder { radius, height } => {
+                std::f64::consts::PI * (f64::from(*radius) / s + 0.71).powi(2) * fitted(*height)
+            }
+            Shape::Slab { size, thickness } => {
+                fitted(size[0]) * fitted(size[1]) * fitted(*thickness)
+            }
+        }
+    }
+
+    /// DC coefficients of the core colour, the shells (with cumulative depths) and the
+    /// checker colours.
+    fn region_colors(&self) -> RegionColors {
+        let mut bottom = 0.0f64;
+        let shells = self
+            .shells
+            .iter()
+            .map(|sh| {
+                bottom += f64::from(sh.depth);
+                (bottom, rgb_to_dc(sh.color))
+            })
+            .collect();
+        RegionColors {
+            core: rgb_to_dc(self.color),
+            shells,
+            checker: self.checker.as_ref().map(|c| {
+                (
+                    f64::from(c.period),
+                    [rgb_to_dc(c.colors[0]), rgb_to_dc(c.colors[1])],
+                )
+            }),
+        }
+    }
+
+    fn color_at(&self, colors: &RegionColors, solid: &Solid, p: [f64; 3]) -> [f32; 3] {
+        if let Some((period, dc)) = &colors.checker {
+            let parity = ((p[0] / period).floor() + (p[1] / period).floor()).rem_euclid(2.0);
+            return if parity < 0.5 { dc[0] } else { dc[1] };
+        }
+        let depth = solid.depth(p);
+        colors
+            .shells
+            .iter()
+            .find(|(bottom, _)| depth < *bottom)
+            .map_or(colors.core, |(_, dc)| *dc)
+    }
+}
+
+struct RegionColors {
+    core: [f32; 3],
+    /// (cumulative depth of the shell's inner side, DC), outermost first.
+    shells: Vec<(f64, [f32; 3])>,
+    checker: Option<(f64, [[f32; 3]; 2])>,
+}
+
+/// The solid in f64, with its lattice, clamping and depth below the surface.
+enum Solid {
+    Sphere { r: f64 },
+    Box { half: [f64; 3] },
+    Cylinder { r: f64, half_h: f64 },
+    Slab { half: [f64; 2], t: f64 },
+}
+
+/// Lattice coordinates along one axis: `start + i · step`, i < count.
+#[derive(Clone, Copy)]
+struct Axis {
+    start: f64,
+    step: f64,
+    count: usize,
+}
+
+impl Axis {
+    /// Cell centres of a whole number of cells (close to `s` wide) covering [lo, hi].
+    fn fitted(lo: f64, hi: f64, s: f64) -> Axis {
+        let count = ((hi - lo) / s).round().max(1.0) as usize;
+        let step = (hi - lo) / count as f64;
+        Axis {
+            start: lo + 0.5 * step,
+            step,
+            count,
+        }
+    }
+
+    /// Multiples of `s` within [−r, r] (always including 0).
+    fn centred(r: f64, s: f64) -> Axis {
+        let m = (r / s).floor() as usize;
+        Axis {
+            start: -(m as f64) * s,
+            step: s,
+            count: 2 * m + 1,
+        }
+    }
+
+    fn coord(&self, i: usize) -> f64 {
+        self.start + i as f64 * self.step
+    }
+}
+
+impl Solid {
+    fn new(shape: &Shape) -> Solid {
+        match shape {
+            Shape::Sphere { radius } => Solid::Sphere {
+                r: f64::from(*radius),
+            },
+            Shape::Box { size } => Solid::Box {
+                half: size.map(|l| 0.5 * f64::from(l)),
+            },
+            Shape::Cylinder { radius, height } => Solid::Cylinder {
+                r: f64::from(*radius),
+                half_h: 0.5 * f64::from(*height),
+            },
+            Shape::Slab { size, thickness } => Solid::Slab {
+                half: size.map(|l| 0.5 * f64::from(l)),
+                t: f64::from(*thickness),
+            },
+        }
+    }
+
+    fn axes(&self, s: f64) -> [Axis; 3] {
+        match *self {
+            Solid::Sphere { r } => [Axis::centred(r, s); 3],
+            Solid::Box { half } => half.map(|h| Axis::fitted(-h, h, s)),
+            Solid::Cylinder { r, half_h } => [
+                Axis::centred(r, s),
+                Axis::centred(r, s),
+                Axis::fitted(-half_h, half_h, s),
+            ],
+            Solid::Slab { half, t } => [
+                Axis::fitted(-half[0], half[0], s),
+                Axis::fitted(-half[1], half[1], s),
+                Axis::fitted(-t, 0.0, s),
+            ],
+        }
+    }
+
+    /// Whether an (unjittered) lattice point belongs to the solid.
+    fn contains_lattice(&self, x: f64, y: f64, _z: f64) -> bool {
+        match *self {
+            Solid::Sphere { r } => x * x + y * y + _z * _z <= r * r,
+            Solid::Cylinder { r, .. } => x * x + y * y <= r * r,
+            Solid::Box { .. } | Solid::Slab { .. } => true,
+        }
+    }
+
+    /// The nearest point of the solid (the point itself when inside).
+    fn clamp(&self, p: [f64; 3]) -> [f64; 3] {
+        match *self {
+            Solid::Sphere { r } => {
+                let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+                if len > r {
+                    p.map(|c| c * (r / len))
+                } else {
+                    p
+                }
+            }
+            Solid::Box { half } => [0, 1, 2].map(|i| p[i].clamp(-half[i], half[i])),
+            Solid::Cylinder { r, half_h } => {
+                let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
+                let f = if rho > r { r / rho } else { 1.0 };
+                [p[0] * f, p[1] * f, p[2].clamp(-half_h, half_h)]
+            }
+            Solid::Slab { half, t } => [
+                p[0].clamp(-half[0], half[0]),
+                p[1].clamp(-half[1], half[1]),
+                p[2].clamp(-t, 0.0),
+            ],
+        }
+    }
+
+    /// Depth below the surface of a point inside the solid.
+    fn depth(&self, p: [f64; 3]) -> f64 {
+        match *self {
+            Solid::Sphere { r } => r - (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt(),
+            Solid::Box { half } => (0..3)
+                .map(|i| half[i] - p[i].abs())
+                .fold(f64::INFINITY, f64::min),
+            Solid::Cylinder { r, half_h } => {
+                (r - (p[0] * p[0] + p[1] * p[1]).sqrt()).min(half_h - p[2].abs())
+            }
+            Solid::Slab { .. } => -p[2],
+        }
+    }
+}
+
+/// splitmix64: tiny, fast and good enough for jitter.
+struct SplitMix64(u64);
+
+impl SplitMix64 {
+    fn new(seed: u64) -> Self {
+        let mut r = SplitMix64(seed);
+        r.next_u64();
+        r
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    fn uniform(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+}
+
+const POSITIVE: &str = "a finite number > 0";
+const UNIT: &str = "three finite numbers in [0, 1]";
+
+fn invalid(field: &'static str, value: String, expected: &'static str) -> ProceduralError {
+    ProceduralError::Invalid {
+        field,
+        value,
+        expected,
+    }
+}
+
+fn positive(field: &'static str, v: f32) -> Result<(), ProceduralError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid(field, v.to_string(), POSITIVE))
+    }
+}
+
+fn positive_all(field: &'static str, v: &[f32]) -> Result<(), ProceduralError> {
+    if v.iter().all(|x| x.is_finite() && *x > 0.0) {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("{v:?}"), "finite numbers > 0"))
+    }
+}
+
+fn color_ok(c: &[f32; 3]) -> bool {
+    c.iter().all(|x| x.is_finite() && (0.0..=1.0).contains(x))
+}
+
+fn unit_color(field: &'static str, c: &[f32; 3]) -> Result<(), ProceduralError> {
+    if color_ok(c) {
+        Ok(())
+    } else {
+        Err(invalid(field, format!("{c:?}"), UNIT))
+    }
+}
+
+macro_rules! shell_field_table {
+    ($suffix:literal; $($i:literal)*) => { [$(concat!("shells[", $i, "].", $suffix)),*] };
+}
+const SHELL_DEPTH_FIELDS: [&str; 32] = shell_field_table!("depth";
+    0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
+const SHELL_COLOR_FIELDS: [&str; 32] = shell_field_table!("color";
+    0 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31);
+
+/// `field` names (`&'static str`) of shell `i`'s depth and colour; `None` beyond the table,
+/// where the error's `value` names the index instead.
+fn shell_fields(i: usize) -> (Option<&'static str>, Option<&'static str>) {
+    (
+        SHELL_DEPTH_FIELDS.get(i).copied(),
+        SHELL_COLOR_FIELDS.get(i).copied(),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shell_field_names() {
+        assert_eq!(SHELL_DEPTH_FIELDS[1], "shells[1].depth");
+        assert_eq!(SHELL_COLOR_FIELDS[31], "shells[31].color");
+    }
+
+    #[test]
+    fn splitmix_is_uniform_enough() {
+        let mut r = SplitMix64::new(7);
+        let mean: f64 = (0..10_000).map(|_| r.uniform()).sum::<f64>() / 10_000.0;
+        assert!((mean - 0.5).abs() < 0.02);
+    }
+}
