@@ -213,7 +213,9 @@ impl GpuContext {
 
     /// Largest storage buffer binding this device accepts.
     pub fn max_binding(&self) -> u64 {
-        u64::from(self.limits.max_storage_buffer_binding_size).min(self.limits.max_buffer_size)
+        self.limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size)
     }
 
     /// Block until all submitted work is done.

@@ -32,7 +32,7 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
     let opacity = splats.opacities[i];
     let w = camera.world_to_camera();
     let t = w * (mean - camera.position);
-    if !(t.z >= camera.near) || opacity <= 0.0 || !mean.is_finite() {
+    if !mean.is_finite() || t.z < camera.near || opacity <= 0.0 {
         return None;
     }
     let (tan_x, tan_y) = camera.tan_half_fov();
@@ -52,7 +52,7 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
     let b = t0.dot(sigma * t1);
     let c = t1.dot(sigma * t1) + 0.3;
     let det = a * c - b * b;
-    if !(det > 0.0) || !det.is_finite() {
+    if !det.is_finite() || det <= 0.0 {
         return None;
     }
     let conic = Vec3::new(c / det, -b / det, a / det);

@@ -1,0 +1,647 @@
+//! The `splatter` binary end to end: bad input ends as exactly one `error: …` line on stderr
+//! and a non-zero exit, never a panic; the message names what is wrong. Plus a few positive
+//! runs (the smallest render, `schema`, `info`, `default-scene`).
+//!
+//! Every run happens in its own temporary directory (the binary's current directory), so
+//! default output folders (`out/<name>`) never land in the source tree. Renders are tiny
+//! (64×48, one frame): on a machine without a GPU they run on lavapipe, a CPU Vulkan driver.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use glam::{Quat, Vec3};
+use splatter::splat::ply::{write_ply, PlyFormat};
+use splatter::splat::GaussianCloud;
+use tempfile::TempDir;
+
+// ---------------------------------------------------------------------------------------------
+// Running the binary
+// ---------------------------------------------------------------------------------------------
+
+/// Run `splatter ARGS` with `cwd` as the current directory.
+///
+/// `RUST_LOG` is removed so the binary's own default log filter applies (warnings only), and
+/// `RUST_BACKTRACE` so that a panic always prints its `RUST_BACKTRACE` hint (which the
+/// no-panic check looks for) rather than a backtrace.
+fn splatter(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splatter"))
+        .args(args)
+        .current_dir(cwd)
+        .env_remove("RUST_LOG")
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("the splatter binary runs")
+}
+
+/// Lines that graphics drivers print on their own, which the binary cannot suppress.
+///
+/// When wgpu enumerates adapters (every render and `info`), Mesa's GL/EGL stack and lavapipe
+/// write straight to the process's stderr: `error: XDG_RUNTIME_DIR is invalid or not set in
+/// the environment.` (from the Wayland/EGL platform probe — note it even starts with
+/// `error: `), `[ERROR] EGL …` (wgpu-hal's EGL callback, logged through env_logger), `MESA…`
+/// diagnostics and `WARNING: lavapipe is not a conformant vulkan implementation…`. They depend
+/// on the machine, not on the input, so they are ignored when counting error lines.
+fn is_driver_noise(line: &str) -> bool {
+    line.contains("XDG_RUNTIME_DIR")
+        || line.starts_with("[ERROR] EGL")
+        || line.starts_with("MESA")
+        || line.starts_with("WARNING: lavapipe")
+}
+
+/// stderr without driver noise and blank lines.
+fn stderr_lines(out: &Output) -> Vec<String> {
+    String::from_utf8_lossy(&out.stderr)
+        .lines()
+        .filter(|l| !l.trim().is_empty() && !is_driver_noise(l))
+        .map(str::to_string)
+        .collect()
+}
+
+fn describe(out: &Output) -> String {
+    format!(
+        "exit status: {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// The run did not panic.
+fn assert_no_panic(out: &Output) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
+        "the binary panicked:\n{}",
+        describe(out)
+    );
+}
+
+/// The run failed cleanly: non-zero exit, no panic, exactly one (non-noise) stderr line and it
+/// starts with `error: `. Returns that line.
+fn expect_error(out: &Output) -> String {
+    assert_no_panic(out);
+    assert!(
+        !out.status.success(),
+        "expected a non-zero exit:\n{}",
+        describe(out)
+    );
+    assert!(
+        out.status.code().is_some(),
+        "killed by a signal, not a clean exit:\n{}",
+        describe(out)
+    );
+    let lines = stderr_lines(out);
+    assert_eq!(
+        lines.len(),
+        1,
+        "expected exactly one stderr line:\n{}",
+        describe(out)
+    );
+    let line = lines.into_iter().next().unwrap();
+    assert!(
+        line.starts_with("error: "),
+        "the stderr line should start with `error: `:\n{}",
+        describe(out)
+    );
+    line
+}
+
+/// `line` contains every one of `needles`.
+fn assert_mentions(line: &str, needles: &[&str]) {
+    for n in needles {
+        assert!(line.contains(n), "the error should mention {n:?}: {line}");
+    }
+}
+
+/// The run succeeded without a panic.
+fn expect_success(out: &Output) {
+    assert_no_panic(out);
+    assert!(out.status.success(), "expected success:\n{}", describe(out));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Inputs
+// ---------------------------------------------------------------------------------------------
+
+/// A fresh directory to run in.
+fn workdir() -> TempDir {
+    tempfile::tempdir().expect("a temporary directory")
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).expect("write a test input");
+    path
+}
+
+/// A small procedural sphere (about 500 Gaussians at this spacing).
+const SPHERE: &str = r#"{"procedural": {"shape": "sphere", "radius": 0.5, "spacing": 0.1, "color": [0.9, 0.2, 0.1]}}"#;
+
+/// A scene `width`×48 with `frames` frames, an orbit camera with field of view `fov` (JSON
+/// text) and the given `objects` (a JSON array).
+fn scene_json(width: i64, frames: u32, fov: &str, objects: &str) -> String {
+    format!(
+        r#"{{
+  "output": {{"width": {width}, "height": 48, "frames": {frames}}},
+  "camera": {{"fov_y_deg": {fov}, "path": {{"type": "orbit", "target": [0, 0, 0], "radius": 3, "height": 1}}}},
+  "objects": {objects}
+}}
+"#
+    )
+}
+
+/// The smallest useful scene: one frame of a small sphere.
+fn tiny_scene() -> String {
+    scene_json(64, 1, "50", &format!("[{SPHERE}]"))
+}
+
+/// A scene whose only object is the sphere with `transform`.
+fn sphere_with_transform(transform: &str) -> String {
+    let object =
+        SPHERE.trim_end_matches('}').to_string() + &format!(r#", "transform": {transform}}}"#);
+    scene_json(64, 1, "50", &format!("[{object}]"))
+}
+
+/// A tiny valid Gaussian cloud (SH degree 0), `n` Gaussians on a line.
+fn tiny_cloud(n: usize) -> GaussianCloud {
+    let mut c = GaussianCloud::default();
+    for i in 0..n {
+        let t = i as f32 / n.max(1) as f32 - 0.5;
+        c.positions.push(Vec3::new(t, 0.2 * t, -0.1 * t));
+        c.scales.push(Vec3::splat(0.05));
+        c.rotations.push(Quat::IDENTITY);
+        c.opacities.push(0.8);
+        c.sh.extend([0.5, 0.1, -0.2]);
+    }
+    c
+}
+
+/// Write a valid binary PLY of `n` Gaussians at `dir/name`.
+fn write_tiny_ply(dir: &Path, name: &str, n: usize) -> PathBuf {
+    let path = dir.join(name);
+    write_ply(&path, &tiny_cloud(n), PlyFormat::BinaryLittleEndian).expect("write_ply");
+    path
+}
+
+/// The header of an ASCII 3DGS PLY with `n` vertices and the given properties (all floats).
+fn ascii_header(n: usize, properties: &[&str]) -> String {
+    let mut h = format!("ply\nformat ascii 1.0\nelement vertex {n}\n");
+    for p in properties {
+        h.push_str(&format!("property float {p}\n"));
+    }
+    h.push_str("end_header\n");
+    h
+}
+
+/// Every 3DGS property of an SH degree 0 PLY, in the usual order.
+const PROPERTIES: [&str; 14] = [
+    "x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+    "rot_0", "rot_1", "rot_2", "rot_3",
+];
+
+/// An INRIA 3DGS `cameras.json` with two cameras looking at the origin along +y / −x.
+const CAMERAS_JSON: &str = r#"[
+  {"id": 0, "img_name": "a", "width": 64, "height": 48,
+   "position": [0, -3, 0],
+   "rotation": [[1, 0, 0], [0, 0, 1], [0, -1, 0]],
+   "fx": 60, "fy": 60},
+  {"id": 1, "img_name": "b", "width": 64, "height": 48,
+   "position": [3, 0, 0],
+   "rotation": [[0, 0, -1], [1, 0, 0], [0, -1, 0]],
+   "fx": 60, "fy": 60}
+]
+"#;
+
+/// Files in `dir` (names only), sorted.
+fn list(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+// ---------------------------------------------------------------------------------------------
+// Missing and broken input files
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn missing_scene_file() {
+    let dir = workdir();
+    let out = splatter(dir.path(), &["render", "no_such_scene.json"]);
+    let line = expect_error(&out);
+    assert_mentions(&line, &["no_such_scene.json"]);
+    // The OS reason should be stated once, not repeated by the error chain.
+    let reason = "No such file or directory";
+    assert_eq!(
+        line.matches(reason).count(),
+        1,
+        "the OS error should appear exactly once: {line}"
+    );
+}
+
+#[test]
+fn missing_ply_file() {
+    let dir = workdir();
+    let out = splatter(
+        dir.path(),
+        &["render", "--ply", "nope.ply", "--out", "frames"],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["nope.ply"]);
+    assert!(
+        !dir.path().join("frames").exists(),
+        "no output folder on error"
+    );
+}
+
+#[test]
+fn truncated_binary_ply() {
+    let dir = workdir();
+    let ply = write_tiny_ply(dir.path(), "cut.ply", 16);
+    let len = std::fs::metadata(&ply).unwrap().len();
+    // Cut the body in the middle of a vertex (each vertex is 17 floats = 68 bytes here).
+    let file = std::fs::OpenOptions::new().write(true).open(&ply).unwrap();
+    file.set_len(len - 100).unwrap();
+    drop(file);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render", "--ply", "cut.ply", "--out", "frames", "--frames", "0..1", "--width", "64",
+            "--height", "48",
+        ],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["cut.ply", "truncated", "16"]);
+}
+
+#[test]
+fn ply_without_opacity() {
+    let dir = workdir();
+    let props: Vec<&str> = PROPERTIES
+        .iter()
+        .copied()
+        .filter(|p| *p != "opacity")
+        .collect();
+    let mut text = ascii_header(2, &props);
+    text.push_str("0 0 0 0.5 0.5 0.5 -3 -3 -3 1 0 0 0\n");
+    text.push_str("0.1 0 0 0.5 0.5 0.5 -3 -3 -3 1 0 0 0\n");
+    write(dir.path(), "no_opacity.ply", &text);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render",
+            "--ply",
+            "no_opacity.ply",
+            "--out",
+            "frames",
+            "--frames",
+            "0..1",
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["no_opacity.ply", "opacity"]);
+}
+
+#[test]
+fn nan_in_ply_is_skipped_with_a_warning() {
+    let dir = workdir();
+    let mut text = ascii_header(5, &PROPERTIES);
+    text.push_str("0 0 0 0.5 0.5 0.5 2 -3 -3 -3 1 0 0 0\n");
+    text.push_str("nan 0 0 0.5 0.5 0.5 2 -3 -3 -3 1 0 0 0\n");
+    text.push_str("0.3 0 0 0.5 0.5 0.5 2 -3 -3 -3 1 0 0 0\n");
+    text.push_str("0 0.3 0 0.5 0.5 0.5 nan -3 -3 -3 1 0 0 0\n");
+    text.push_str("0 0 0.3 0.5 0.5 0.5 2 -3 -3 -3 1 0 0 0\n");
+    write(dir.path(), "holes.ply", &text);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render",
+            "--ply",
+            "holes.ply",
+            "--out",
+            "frames",
+            "--frames",
+            "0..1",
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+    );
+    expect_success(&out);
+    let warning = stderr_lines(&out)
+        .into_iter()
+        .find(|l| l.contains("skipped"))
+        .unwrap_or_else(|| panic!("no warning about skipped Gaussians:\n{}", describe(&out)));
+    assert_mentions(&warning, &["holes.ply", "2 Gaussians"]);
+    assert!(
+        !stderr_lines(&out).iter().any(|l| l.starts_with("error: ")),
+        "a successful run prints no error line:\n{}",
+        describe(&out)
+    );
+    assert_eq!(list(&dir.path().join("frames")), ["frame_00000.png"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene values out of range
+// ---------------------------------------------------------------------------------------------
+
+/// Render `scene` (written as `name`) and expect a clean error; returns the error line.
+fn render_scene_error(name: &str, scene: &str, extra: &[&str]) -> String {
+    let dir = workdir();
+    write(dir.path(), name, scene);
+    let mut args = vec!["render", name, "--out", "frames"];
+    args.extend_from_slice(extra);
+    let out = splatter(dir.path(), &args);
+    let line = expect_error(&out);
+    assert_mentions(&line, &[name]);
+    line
+}
+
+#[test]
+fn zero_transform_scale() {
+    let line = render_scene_error(
+        "zero_scale.json",
+        &sphere_with_transform(r#"{"scale": 0}"#),
+        &[],
+    );
+    assert_mentions(&line, &["objects[0].transform.scale", "= 0"]);
+}
+
+#[test]
+fn negative_transform_scale() {
+    let line = render_scene_error(
+        "neg_scale.json",
+        &sphere_with_transform(r#"{"scale": -1}"#),
+        &[],
+    );
+    assert_mentions(&line, &["objects[0].transform.scale", "-1"]);
+}
+
+#[test]
+fn zero_per_axis_transform_scale() {
+    let line = render_scene_error(
+        "axis_scale.json",
+        &sphere_with_transform(r#"{"scale": [1, 0, 1]}"#),
+        &[],
+    );
+    assert_mentions(&line, &["objects[0].transform.scale", "[1.0, 0.0, 1.0]"]);
+}
+
+#[test]
+fn procedural_sphere_radius_zero() {
+    let object =
+        r#"{"procedural": {"shape": "sphere", "radius": 0, "spacing": 0.1, "color": [1, 1, 1]}}"#;
+    let line = render_scene_error(
+        "flat_ball.json",
+        &scene_json(64, 1, "50", &format!("[{object}]")),
+        &[],
+    );
+    assert_mentions(&line, &["objects[0].procedural.radius", "0"]);
+}
+
+#[test]
+fn unknown_key_in_scene() {
+    let scene = r#"{
+  "output": {"width": 64, "height": 48, "frames": 1},
+  "camera": {"fovy": 50, "path": {"type": "orbit", "radius": 3}},
+  "objects": []
+}
+"#;
+    let line = render_scene_error("typo.json", scene, &[]);
+    assert_mentions(&line, &["fovy", "unknown field"]);
+    // `error: typo.json:LINE:COLUMN: …`
+    let rest = line
+        .strip_prefix("error: typo.json:")
+        .unwrap_or_else(|| panic!("expected `error: typo.json:LINE:COLUMN: …`: {line}"));
+    let mut parts = rest.splitn(3, ':');
+    let l: usize = parts.next().unwrap().parse().expect("a line number");
+    let c: usize = parts.next().unwrap().parse().expect("a column number");
+    // Where `"fovy"` is in the file (1-based line and columns of its quotes).
+    let (key_line, text) = scene
+        .lines()
+        .enumerate()
+        .find(|(_, t)| t.contains("\"fovy\""))
+        .unwrap();
+    let first = text.find("\"fovy\"").unwrap() + 1;
+    let last = first + "\"fovy\"".len() - 1;
+    assert_eq!(l, key_line + 1, "line of `fovy`: {line}");
+    assert!(
+        (first..=last + 1).contains(&c),
+        "column {c} should point at `fovy` (columns {first}..={last}): {line}"
+    );
+}
+
+#[test]
+fn fov_zero() {
+    let line = render_scene_error(
+        "fov0.json",
+        &scene_json(64, 1, "0", &format!("[{SPHERE}]")),
+        &[],
+    );
+    assert_mentions(&line, &["camera.fov_y_deg", "= 0"]);
+}
+
+#[test]
+fn fov_negative() {
+    let line = render_scene_error(
+        "fovneg.json",
+        &scene_json(64, 1, "-10", &format!("[{SPHERE}]")),
+        &[],
+    );
+    assert_mentions(&line, &["camera.fov_y_deg", "-10"]);
+}
+
+#[test]
+fn zero_width_in_scene() {
+    let line = render_scene_error(
+        "narrow.json",
+        &scene_json(0, 1, "50", &format!("[{SPHERE}]")),
+        &[],
+    );
+    assert_mentions(&line, &["output.width", "= 0"]);
+}
+
+#[test]
+fn zero_width_on_command_line() {
+    let line = render_scene_error("ok.json", &tiny_scene(), &["--width", "0"]);
+    assert_mentions(&line, &["width", "0"]);
+}
+
+#[test]
+fn zero_width_on_command_line_with_ply() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render", "--ply", "tiny.ply", "--out", "frames", "--width", "0", "--height", "48",
+        ],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["width", "0"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Command-line values out of range
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn camera_index_out_of_range() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    write(dir.path(), "cameras.json", CAMERAS_JSON);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render",
+            "--ply",
+            "tiny.ply",
+            "--cameras",
+            "cameras.json",
+            "--camera",
+            "5",
+            "--out",
+            "frames",
+        ],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["--camera 5", "cameras.json", "2 cameras"]);
+}
+
+#[test]
+fn frames_out_of_range() {
+    let line = render_scene_error(
+        "two.json",
+        &scene_json(64, 2, "50", &format!("[{SPHERE}]")),
+        &["--frames", "5..99"],
+    );
+    assert_mentions(&line, &["--frames", "5..99", "2 frames"]);
+}
+
+#[test]
+fn frames_not_a_number() {
+    let line = render_scene_error(
+        "two_b.json",
+        &scene_json(64, 2, "50", &format!("[{SPHERE}]")),
+        &["--frames", "x..1"],
+    );
+    assert_mentions(&line, &["--frames", "x"]);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Unwritable output
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn output_dir_in_proc() {
+    let dir = workdir();
+    write(dir.path(), "ok.json", &tiny_scene());
+    let out = splatter(
+        dir.path(),
+        &["render", "ok.json", "--out", "/proc/splatter-forbidden"],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["/proc/splatter-forbidden"]);
+}
+
+#[test]
+fn output_dir_under_a_regular_file() {
+    let dir = workdir();
+    write(dir.path(), "ok.json", &tiny_scene());
+    write(dir.path(), "plain.txt", "not a folder\n");
+    let out = splatter(
+        dir.path(),
+        &["render", "ok.json", "--out", "plain.txt/frames"],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["plain.txt/frames"]);
+    assert_eq!(
+        std::fs::read_to_string(dir.path().join("plain.txt")).unwrap(),
+        "not a folder\n"
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
+// Positive runs
+// ---------------------------------------------------------------------------------------------
+
+#[test]
+fn smallest_scene_renders_one_frame() {
+    let dir = workdir();
+    write(dir.path(), "tiny.json", &tiny_scene());
+    let out = splatter(dir.path(), &["render", "tiny.json", "--out", "frames"]);
+    expect_success(&out);
+    let frames = dir.path().join("frames");
+    // Exactly the frame: no `.frame_00000.png.tmp` or other leftovers.
+    assert_eq!(list(&frames), ["frame_00000.png"], "{}", describe(&out));
+    let img = image::open(frames.join("frame_00000.png"))
+        .expect("a readable PNG")
+        .to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48));
+    // The sphere is in view: some pixel is not the (black) background.
+    assert!(
+        img.pixels().any(|p| p.0 != [0, 0, 0]),
+        "the frame is all background"
+    );
+}
+
+#[test]
+fn scene_output_dir_defaults_to_out_slash_name() {
+    let dir = workdir();
+    write(dir.path(), "tiny.json", &tiny_scene());
+    let out = splatter(dir.path(), &["render", "tiny.json"]);
+    expect_success(&out);
+    assert_eq!(list(&dir.path().join("out/tiny")), ["frame_00000.png"]);
+}
+
+#[test]
+fn schema_is_json_with_properties() {
+    let dir = workdir();
+    let out = splatter(dir.path(), &["schema"]);
+    expect_success(&out);
+    let v: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("`splatter schema` prints JSON");
+    let props = v
+        .get("properties")
+        .and_then(|p| p.as_object())
+        .expect("the schema has `properties`");
+    for key in ["output", "camera", "objects"] {
+        assert!(props.contains_key(key), "schema properties lack {key}: {v}");
+    }
+}
+
+#[test]
+fn info_names_an_adapter() {
+    let dir = workdir();
+    let out = splatter(dir.path(), &["info"]);
+    expect_success(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("adapter"), "{}", describe(&out));
+}
+
+#[test]
+fn default_scene_is_json() {
+    let dir = workdir();
+    let out = splatter(dir.path(), &["default-scene"]);
+    expect_success(&out);
+    let v: serde_json::Value =
+        serde_json::from_slice(&out.stdout).expect("`splatter default-scene` prints JSON");
+    assert!(
+        v.get("output").is_some() && v.get("camera").is_some(),
+        "{v}"
+    );
+    assert!(
+        !v["objects"].as_array().map_or(true, |a| a.is_empty()),
+        "the default scene has objects: {v}"
+    );
+}
