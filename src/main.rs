@@ -97,10 +97,24 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", one_line(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, leaving out a cause whose text the message already
+/// carries (our error types print their source, as wgpu's and io's errors are terse).
+fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !msg.contains(&text) {
+            msg.push_str(": ");
+            msg.push_str(&text);
+        }
+    }
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
 fn run(cli: Cli) -> Result<()> {
@@ -172,6 +186,16 @@ fn frame_range(spec: Option<&str>, count: u32) -> Result<std::ops::Range<u32>> {
 
 /// The scene, its camera path and the frames to render, from the command line.
 fn prepare(args: &RenderArgs) -> Result<(Scene, CameraPath, splatter::render::Splats)> {
+    for (flag, value) in [("--width", args.width), ("--height", args.height)] {
+        if let Some(v) = value {
+            if !(1..=scene::MAX_IMAGE_SIZE).contains(&v) {
+                bail!(
+                    "{flag} {v}: expected an image size in pixels in 1..={}",
+                    scene::MAX_IMAGE_SIZE
+                );
+            }
+        }
+    }
     if let Some(ply) = &args.ply {
         return prepare_quick_look(args, ply);
     }

@@ -106,6 +106,33 @@ fn expect_error(out: &Output) -> String {
     line
 }
 
+/// The run failed cleanly after rendering had started: like [`expect_error`], except that the
+/// progress lines printed before the failure (`adapter: …`, `scene: …`, `frame 1/1 …`) are
+/// allowed. Exactly one line starts with `error: `, and it is the last one. Returns it.
+fn expect_late_error(out: &Output) -> String {
+    assert_no_panic(out);
+    assert!(
+        !out.status.success() && out.status.code().is_some(),
+        "expected a non-zero exit:\n{}",
+        describe(out)
+    );
+    let lines = stderr_lines(out);
+    let errors: Vec<&String> = lines.iter().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(
+        errors.len(),
+        1,
+        "expected exactly one `error: ` line:\n{}",
+        describe(out)
+    );
+    assert_eq!(
+        lines.last(),
+        Some(errors[0]),
+        "the error should be the last line:\n{}",
+        describe(out)
+    );
+    errors[0].clone()
+}
+
 /// `line` contains every one of `needles`.
 fn assert_mentions(line: &str, needles: &[&str]) {
     for n in needles {
@@ -157,8 +184,8 @@ fn tiny_scene() -> String {
 
 /// A scene whose only object is the sphere with `transform`.
 fn sphere_with_transform(transform: &str) -> String {
-    let object =
-        SPHERE.trim_end_matches('}').to_string() + &format!(r#", "transform": {transform}}}"#);
+    let inner = SPHERE.strip_suffix('}').expect("SPHERE is a JSON object");
+    let object = format!(r#"{inner}, "transform": {transform}}}"#);
     scene_json(64, 1, "50", &format!("[{object}]"))
 }
 
@@ -355,16 +382,15 @@ fn nan_in_ply_is_skipped_with_a_warning() {
 // Scene values out of range
 // ---------------------------------------------------------------------------------------------
 
-/// Render `scene` (written as `name`) and expect a clean error; returns the error line.
+/// Render `scene` (written as `name`, with `extra` arguments) and expect a clean error;
+/// returns the error line.
 fn render_scene_error(name: &str, scene: &str, extra: &[&str]) -> String {
     let dir = workdir();
     write(dir.path(), name, scene);
     let mut args = vec!["render", name, "--out", "frames"];
     args.extend_from_slice(extra);
     let out = splatter(dir.path(), &args);
-    let line = expect_error(&out);
-    assert_mentions(&line, &[name]);
-    line
+    expect_error(&out)
 }
 
 #[test]
@@ -374,7 +400,10 @@ fn zero_transform_scale() {
         &sphere_with_transform(r#"{"scale": 0}"#),
         &[],
     );
-    assert_mentions(&line, &["objects[0].transform.scale", "= 0"]);
+    assert_mentions(
+        &line,
+        &["zero_scale.json", "objects[0].transform.scale", "= 0"],
+    );
 }
 
 #[test]
@@ -384,7 +413,10 @@ fn negative_transform_scale() {
         &sphere_with_transform(r#"{"scale": -1}"#),
         &[],
     );
-    assert_mentions(&line, &["objects[0].transform.scale", "-1"]);
+    assert_mentions(
+        &line,
+        &["neg_scale.json", "objects[0].transform.scale", "-1"],
+    );
 }
 
 #[test]
@@ -394,7 +426,14 @@ fn zero_per_axis_transform_scale() {
         &sphere_with_transform(r#"{"scale": [1, 0, 1]}"#),
         &[],
     );
-    assert_mentions(&line, &["objects[0].transform.scale", "[1.0, 0.0, 1.0]"]);
+    assert_mentions(
+        &line,
+        &[
+            "axis_scale.json",
+            "objects[0].transform.scale",
+            "[1.0, 0.0, 1.0]",
+        ],
+    );
 }
 
 #[test]
@@ -406,7 +445,10 @@ fn procedural_sphere_radius_zero() {
         &scene_json(64, 1, "50", &format!("[{object}]")),
         &[],
     );
-    assert_mentions(&line, &["objects[0].procedural.radius", "0"]);
+    assert_mentions(
+        &line,
+        &["flat_ball.json", "objects[0].procedural.radius", "0"],
+    );
 }
 
 #[test]
@@ -448,7 +490,7 @@ fn fov_zero() {
         &scene_json(64, 1, "0", &format!("[{SPHERE}]")),
         &[],
     );
-    assert_mentions(&line, &["camera.fov_y_deg", "= 0"]);
+    assert_mentions(&line, &["fov0.json", "camera.fov_y_deg", "= 0"]);
 }
 
 #[test]
@@ -458,7 +500,7 @@ fn fov_negative() {
         &scene_json(64, 1, "-10", &format!("[{SPHERE}]")),
         &[],
     );
-    assert_mentions(&line, &["camera.fov_y_deg", "-10"]);
+    assert_mentions(&line, &["fovneg.json", "camera.fov_y_deg", "-10"]);
 }
 
 #[test]
@@ -468,13 +510,14 @@ fn zero_width_in_scene() {
         &scene_json(0, 1, "50", &format!("[{SPHERE}]")),
         &[],
     );
-    assert_mentions(&line, &["output.width", "= 0"]);
+    assert_mentions(&line, &["narrow.json", "output.width", "= 0"]);
 }
 
 #[test]
 fn zero_width_on_command_line() {
     let line = render_scene_error("ok.json", &tiny_scene(), &["--width", "0"]);
-    assert_mentions(&line, &["width", "0"]);
+    // The 0 came from the command line, not from ok.json: the message should say so.
+    assert_mentions(&line, &["--width", "0"]);
 }
 
 #[test]
@@ -488,7 +531,7 @@ fn zero_width_on_command_line_with_ply() {
         ],
     );
     let line = expect_error(&out);
-    assert_mentions(&line, &["width", "0"]);
+    assert_mentions(&line, &["--width", "0"]);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -571,6 +614,40 @@ fn output_dir_under_a_regular_file() {
     );
 }
 
+#[test]
+fn output_dir_is_a_regular_file() {
+    let dir = workdir();
+    write(dir.path(), "ok.json", &tiny_scene());
+    write(dir.path(), "plain.txt", "not a folder\n");
+    let out = splatter(dir.path(), &["render", "ok.json", "--out", "plain.txt"]);
+    let line = expect_error(&out);
+    assert_mentions(&line, &["plain.txt"]);
+}
+
+/// The frame cannot be written (its name is taken by a folder): the error comes from the PNG
+/// writer thread, after the GPU has started.
+#[test]
+fn frame_path_taken_by_a_directory() {
+    let dir = workdir();
+    write(dir.path(), "ok.json", &tiny_scene());
+    let frames = dir.path().join("frames");
+    std::fs::create_dir_all(frames.join("frame_00000.png").join("occupied")).unwrap();
+    let out = splatter(dir.path(), &["render", "ok.json", "--out", "frames"]);
+    let line = expect_late_error(&out);
+    assert_mentions(&line, &["frame_00000.png"]);
+    assert_eq!(
+        line.matches("Is a directory").count(),
+        1,
+        "the OS error should appear exactly once: {line}"
+    );
+    assert_eq!(
+        list(&frames),
+        ["frame_00000.png"],
+        "no temporary file left behind"
+    );
+    assert!(frames.join("frame_00000.png").join("occupied").is_dir());
+}
+
 // ---------------------------------------------------------------------------------------------
 // Positive runs
 // ---------------------------------------------------------------------------------------------
@@ -602,6 +679,34 @@ fn scene_output_dir_defaults_to_out_slash_name() {
     let out = splatter(dir.path(), &["render", "tiny.json"]);
     expect_success(&out);
     assert_eq!(list(&dir.path().join("out/tiny")), ["frame_00000.png"]);
+}
+
+#[test]
+fn camera_from_cameras_json_renders() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    write(dir.path(), "cameras.json", CAMERAS_JSON);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render",
+            "--ply",
+            "tiny.ply",
+            "--cameras",
+            "cameras.json",
+            "--camera",
+            "1",
+            "--out",
+            "frames",
+        ],
+    );
+    expect_success(&out);
+    let frames = dir.path().join("frames");
+    assert_eq!(list(&frames), ["frame_00000.png"], "{}", describe(&out));
+    let img = image::open(frames.join("frame_00000.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(img.dimensions(), (64, 48), "the size of the file's camera");
 }
 
 #[test]
@@ -641,7 +746,26 @@ fn default_scene_is_json() {
         "{v}"
     );
     assert!(
-        !v["objects"].as_array().map_or(true, |a| a.is_empty()),
+        v["objects"].as_array().is_some_and(|a| !a.is_empty()),
         "the default scene has objects: {v}"
     );
+}
+
+/// A backend that this machine does not have (Metal or DX12 on Linux) gives the
+/// "no adapter" message, which says what to install.
+#[test]
+fn missing_backend_says_what_to_install() {
+    if cfg!(any(target_os = "macos", target_os = "windows")) {
+        return;
+    }
+    let dir = workdir();
+    write(dir.path(), "ok.json", &tiny_scene());
+    for backend in ["metal", "dx12"] {
+        let out = splatter(
+            dir.path(),
+            &["--backend", backend, "render", "ok.json", "--out", "frames"],
+        );
+        let line = expect_error(&out);
+        assert_mentions(&line, &["no GPU adapter", "mesa-vulkan-drivers"]);
+    }
 }

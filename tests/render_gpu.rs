@@ -239,19 +239,33 @@ fn degree_one_colour_follows_the_view_direction() {
     }
 }
 
+/// NaN/Inf and degenerate Gaussians are skipped and counted; a Gaussian stretched far past
+/// the screen is drawn (its tile rectangle is clamped to the screen), and one whose
+/// projected covariance overflows f32 is skipped as degenerate. The frame still renders.
 #[test]
-fn nan_and_degenerate_gaussians_are_skipped_and_counted() {
+fn nan_degenerate_and_huge_gaussians_are_guarded() {
     for gpu in gpus() {
         eprintln!("adapter: {}", gpu.describe());
         let mut renderer = GpuRenderer::new(&gpu);
         let mut splats = random_splats(200, 0, 9);
         splats.means[3] = Vec3::new(f32::NAN, 0.0, 0.0);
         splats.covariances[7][0] = f32::INFINITY;
+        splats.rotations[8] = Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0);
         splats.covariances[11] = [-1.0, 0.0, 0.0, -1.0, 0.0, -1.0];
+        splats.covariances[12] = [1e36, 0.0, 0.0, 1e36, 0.0, 1e36];
+        splats.covariances[13] = [1e4, 0.0, 0.0, 1e4, 0.0, 1e4];
+        splats.opacities[13] = 0.5;
         renderer.upload(&gpu, &splats).unwrap();
-        let image = renderer.render(&gpu, &camera(64, 64), Vec3::ZERO).unwrap();
-        assert_eq!(image.stats.skipped_nonfinite, 2);
-        assert_eq!(image.stats.skipped_degenerate, 1);
+        let cam = camera(64, 64);
+        let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        assert_eq!(image.stats.skipped_nonfinite, 3);
+        assert_eq!(image.stats.skipped_degenerate, 2);
+        // The huge Gaussian covers every tile: at least 16 pairs (4×4 tiles) come from it.
+        let tiles = 16;
+        assert!(image.stats.intersections >= tiles, "{:?}", image.stats);
+        // And it matches the CPU reference, which guards the same way.
+        let reference = cpu::render(&f16_rounded(splats), &cam, Vec3::ZERO);
+        assert!(cpu::psnr(&image.rgba, &reference) >= 40.0);
     }
 }
 

@@ -217,21 +217,6 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Update the Gaussians in place (same count and SH degree): the path a simulation uses.
-    pub fn update(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
-        match &self.splats {
-            Some(b) if b.count as usize == splats.len() && b.sh_degree == splats.sh_degree => {
-                let (gaussians, words) = layout::pack_splats(splats);
-                gpu.queue
-                    .write_buffer(&b.gaussians, 0, bytemuck::cast_slice(&gaussians));
-                gpu.queue
-                    .write_buffer(&b.sh_words, 0, bytemuck::cast_slice(&words));
-                Ok(())
-            }
-            _ => self.upload(gpu, splats),
-        }
-    }
-
     fn ensure_frame_buffers(&mut self, gpu: &GpuContext, width: u32, height: u32, capacity: u32) {
         if let Some(f) = &self.frame_buffers {
             if f.width == width && f.height == height && f.capacity >= capacity {
