@@ -11,29 +11,12 @@ use image::ImageEncoder;
 use crate::gpu::GpuContext;
 use crate::render::splats::sym3_from_mat3;
 use crate::render::{Camera, GpuRenderer, Splats};
-
-/// A deterministic PRNG (splitmix64) for synthetic scenes.
-pub struct SplitMix(pub u64);
-
-impl SplitMix {
-    pub fn next_f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 40) as f32 / (1u64 << 24) as f32
-    }
-
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next_f32()
-    }
-}
+use crate::rng::SplitMix64;
 
 /// `n` Gaussians of SH degree `degree` filling a ball of radius 1, sized like a trained
 /// capture of that density (scale ≈ the mean spacing), random orientations and colours.
 pub fn synthetic_splats(n: usize, degree: u32, seed: u64) -> Splats {
-    let mut rng = SplitMix(seed);
+    let mut rng = SplitMix64::new(seed);
     let k = crate::splat::sh_coeff_count(degree) * 3;
     let spacing = (4.19 / n.max(1) as f32).cbrt();
     let mut s = Splats {

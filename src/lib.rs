@@ -8,5 +8,6 @@ pub mod bench;
 pub mod gpu;
 pub mod output;
 pub mod render;
+pub mod rng;
 pub mod scene;
 pub mod splat;

@@ -14,6 +14,7 @@ use std::path::{Path, PathBuf};
 use glam::{Quat, Vec3};
 use splatter::gpu::GpuContext;
 use splatter::render::{cpu, GpuRenderer};
+use splatter::rng::SplitMix64;
 use splatter::scene;
 use splatter::splat::{ply, GaussianCloud};
 
@@ -37,13 +38,8 @@ fn ensure_sh3_ply() {
         "{} is missing: run with SPLATTER_BLESS=1 to create it",
         path.display()
     );
-    let mut state = 12345u64;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rng = SplitMix64::new(12345);
+    let mut next = move || rng.uniform() as f32;
     let n = 600;
     let mut cloud = GaussianCloud {
         sh_degree: 3,

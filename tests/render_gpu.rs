@@ -8,6 +8,7 @@ use splatter::gpu::{BackendChoice, GpuContext};
 use splatter::render::cpu;
 use splatter::render::splats::sym3_from_mat3;
 use splatter::render::{Camera, GpuRenderer, Splats};
+use splatter::rng::SplitMix64;
 use splatter::splat::sh;
 
 /// The best adapter, plus the GL backend when it exists and is not the best one, so that the
@@ -29,25 +30,9 @@ fn gpus() -> Vec<GpuContext> {
     list
 }
 
-/// A tiny deterministic PRNG (splitmix64) so the scenes are reproducible.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 40) as f32 / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.next()
-    }
-}
-
 /// `n` random anisotropic Gaussians in a unit-ish cube, random rotations and SH.
 fn random_splats(n: usize, degree: u32, seed: u64) -> Splats {
-    let mut rng = Rng(seed);
+    let mut rng = SplitMix64::new(seed);
     let k = splatter::splat::sh_coeff_count(degree) * 3;
     let mut s = Splats {
         sh_degree: degree,

@@ -732,7 +732,7 @@ fn still_and_orbit_framing() {
     assert_eq!(path.camera(99), c);
 
     let bounds = (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 2.0));
-    let path = scene::orbit_framing(bounds, Vec3::Z, 45.0, 64, 48, 8);
+    let path = scene::CameraPath::orbit_framing(bounds, Vec3::Z, 45.0, 64, 48, 8);
     assert_eq!(path.frames(), 8);
     for f in 0..8 {
         let c = path.camera(f);

@@ -43,19 +43,8 @@ impl Kernel {
 
     /// Bind `buffers` to bindings 0, 1, 2, … (whole buffers).
     pub fn bind(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.label),
-            layout: &self.layout,
-            entries: &entries,
-        })
+        let numbered: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(buffers.iter().copied()).collect();
+        self.bind_at(device, &numbered)
     }
 
     /// Bind buffers at explicit binding numbers (for entry points that skip some).
@@ -85,14 +74,8 @@ impl Kernel {
         bind: &wgpu::BindGroup,
         groups: u32,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(self.label),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind, &[]);
         let (x, y) = dispatch_1d(groups);
-        pass.dispatch_workgroups(x, y, 1);
+        self.dispatch_2d(encoder, bind, x, y);
     }
 
     /// Record a dispatch of an explicit 2D grid of workgroups.

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use crate::render::Splats;
 use crate::splat::procedural::{ProceduralError, ProceduralSpec};
 
-pub use path::{from_cameras_json, orbit_framing, CameraPath};
+pub use path::{from_cameras_json, CameraPath};
 
 /// The embedded default scene (`scenes/default.json`).
 pub const DEFAULT_SCENE_JSON: &str = include_str!("../../scenes/default.json");

@@ -186,18 +186,6 @@ fn plane_basis(up: Vec3) -> (Vec3, Vec3) {
     (e1, up.cross(e1))
 }
 
-/// See [`CameraPath::orbit_framing`].
-pub fn orbit_framing(
-    bounds: (Vec3, Vec3),
-    up: Vec3,
-    fov_y_deg: f32,
-    width: u32,
-    height: u32,
-    frames: u32,
-) -> CameraPath {
-    CameraPath::orbit_framing(bounds, up, fov_y_deg, width, height, frames)
-}
-
 // ---------------------------------------------------------------------------------------------
 // Keyframe splines
 // ---------------------------------------------------------------------------------------------

@@ -74,43 +74,6 @@ impl GaussianCloud {
         )
     }
 
-    /// Raise the SH degree to `degree` by padding with zero coefficients (no-op if the
-    /// cloud already has that degree or higher).
-    pub fn pad_sh_degree(&mut self, degree: u32) {
-        if degree <= self.sh_degree {
-            return;
-        }
-        let old = self.sh_stride();
-        let new = sh_coeff_count(degree) * 3;
-        let mut sh = vec![0.0; self.len() * new];
-        for i in 0..self.len() {
-            sh[i * new..i * new + old].copy_from_slice(&self.sh[i * old..(i + 1) * old]);
-        }
-        self.sh = sh;
-        self.sh_degree = degree;
-    }
-
-    /// Append another cloud; the result has the larger of the two SH degrees.
-    pub fn append(&mut self, mut other: GaussianCloud) {
-        let degree = self.sh_degree.max(other.sh_degree);
-        if self.is_empty() {
-            self.sh_degree = degree;
-        }
-        self.pad_sh_degree(degree);
-        other.pad_sh_degree(degree);
-        let keep_normals = self.normals.len() == self.len() && other.normals.len() == other.len();
-        self.positions.extend(other.positions);
-        self.scales.extend(other.scales);
-        self.rotations.extend(other.rotations);
-        self.opacities.extend(other.opacities);
-        self.sh.extend(other.sh);
-        if keep_normals {
-            self.normals.extend(other.normals);
-        } else {
-            self.normals.clear();
-        }
-    }
-
     /// Check the struct-of-arrays invariants (equal lengths, SH length, degree range).
     pub fn check_consistent(&self) -> Result<(), String> {
         let n = self.len();

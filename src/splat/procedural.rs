@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::sh::rgb_to_dc;
 use super::GaussianCloud;
+use crate::rng::SplitMix64;
 
 /// The solid to fill. All shapes are centred on the object's origin; the slab's top face is
 /// at z = 0 (z is up) so that it can serve as a ground.
@@ -443,30 +444,6 @@ impl Solid {
     }
 }
 
-/// splitmix64: tiny, fast and good enough for jitter.
-struct SplitMix64(u64);
-
-impl SplitMix64 {
-    fn new(seed: u64) -> Self {
-        let mut r = SplitMix64(seed);
-        r.next_u64();
-        r
-    }
-
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [0, 1).
-    fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-    }
-}
-
 const POSITIVE: &str = "a finite number > 0";
 const UNIT: &str = "three finite numbers in [0, 1]";
 
@@ -531,12 +508,5 @@ mod tests {
     fn shell_field_names() {
         assert_eq!(SHELL_DEPTH_FIELDS[1], "shells[1].depth");
         assert_eq!(SHELL_COLOR_FIELDS[31], "shells[31].color");
-    }
-
-    #[test]
-    fn splitmix_is_uniform_enough() {
-        let mut r = SplitMix64::new(7);
-        let mean: f64 = (0..10_000).map(|_| r.uniform()).sum::<f64>() / 10_000.0;
-        assert!((mean - 0.5).abs() < 0.02);
     }
 }
