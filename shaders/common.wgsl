@@ -65,6 +65,9 @@ struct Stats {
 
 const TILE: u32 = 16u;
 
+// Compositing skips α below this (SPEC §7).
+const MIN_ALPHA: f32 = 1.0 / 255.0;
+
 // Flattened workgroup index of a 1D dispatch split over x and y (x ≤ 65535).
 fn flat_workgroup(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return wid.x + wid.y * nwg.x;

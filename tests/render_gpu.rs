@@ -266,3 +266,70 @@ fn empty_scene_renders_the_background() {
         assert!(image.rgba.chunks(4).all(|p| p == [255, 0, 0, 255]));
     }
 }
+
+/// More tile pairs than the first guess of capacity: the renderer grows its buffers and
+/// renders the frame again, with the same result as the CPU reference.
+#[test]
+fn tile_pair_buffers_grow_when_a_frame_needs_more() {
+    for gpu in gpus() {
+        eprintln!("adapter: {}", gpu.describe());
+        let mut renderer = GpuRenderer::new(&gpu);
+        // 2000 Gaussians of 0.3 units seen from ~3.4 units at 256×256: each touches dozens of
+        // tiles, ≈ 10⁵ pairs, above the initial capacity of max(8 N, 65536).
+        let mut splats = random_splats(2000, 0, 21);
+        for c in &mut splats.covariances {
+            *c = sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(0.3 * 0.3)));
+        }
+        let splats = f16_rounded(splats);
+        renderer.upload(&gpu, &splats).unwrap();
+        let cam = camera(256, 256);
+        let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        assert!(image.stats.intersections > 65536, "{:?}", image.stats);
+        assert_eq!(image.dropped_intersections, 0);
+        let psnr = cpu::psnr(&image.rgba, &cpu::render(&splats, &cam, Vec3::ZERO));
+        assert!(psnr >= 40.0, "PSNR {psnr:.1} dB");
+    }
+}
+
+/// Past the pair limit the farthest Gaussians are dropped: with room for exactly the
+/// nearest Gaussian's 16 tiles, the image is that Gaussian alone.
+#[test]
+fn pairs_past_the_limit_drop_the_farthest_gaussians() {
+    for gpu in gpus() {
+        eprintln!("adapter: {}", gpu.describe());
+        let mut renderer = GpuRenderer::new(&gpu);
+        let cam = Camera::look_at(
+            Vec3::new(0.0, 0.0, -3.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            40f32.to_radians(),
+            64,
+            64,
+        );
+        let mut splats = f16_rounded(random_splats(300, 0, 5));
+        // Gaussian 0: nearest to the camera and large enough to touch all 4×4 tiles.
+        splats.means[0] = Vec3::new(0.0, 0.0, -1.5);
+        splats.covariances[0] = sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(0.5 * 0.5)));
+        for m in &mut splats.means[1..] {
+            m.z = m.z.abs() + 0.1; // all others behind it
+        }
+        renderer.upload(&gpu, &splats).unwrap();
+        renderer.limit_tile_pairs(16);
+        let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        assert!(image.dropped_intersections > 0);
+        assert_eq!(image.dropped_intersections, image.stats.intersections - 16);
+        let nearest = Splats {
+            means: vec![splats.means[0]],
+            covariances: vec![splats.covariances[0]],
+            rotations: vec![splats.rotations[0]],
+            opacities: vec![splats.opacities[0]],
+            sh_degree: 0,
+            sh: splats.sh[..3].to_vec(),
+        };
+        let psnr = cpu::psnr(&image.rgba, &cpu::render(&nearest, &cam, Vec3::ZERO));
+        assert!(
+            psnr >= 40.0,
+            "PSNR {psnr:.1} dB against the nearest Gaussian alone"
+        );
+    }
+}

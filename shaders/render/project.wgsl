@@ -1,6 +1,7 @@
 // Pass 1 of the renderer: project every Gaussian (SPEC §7).
 // Per Gaussian: view-space mean, 2D covariance Σ' = J W Σ Wᵀ Jᵀ + 0.3 I, its inverse (the
-// conic), the screen radius from 3 standard deviations, the rectangle of 16×16 tiles it
+// conic), the screen radius from 3 standard deviations (less for faint Gaussians, see
+// `extent_sigmas`), the rectangle of 16×16 tiles it
 // touches, its SH colour, and its depth key for the global depth sort.
 // Mirrors `render::cpu::project_gaussian`.
 
@@ -22,6 +23,14 @@ fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     let u = -q.xyz;
     let t = 2.0 * cross(u, v);
     return v + q.w * t + cross(u, t);
+}
+
+// How many standard deviations the screen radius spans: 3 (SPEC §7), or fewer when the
+// Gaussian's α = ω·exp(−r²/2) already falls below 1/255 inside 3σ, at r = sqrt(2 ln(255 ω)).
+// Tiles this drops hold only pixels the compositing would skip, so the image is unchanged
+// while faint Gaussians touch fewer tiles. Mirrors `render::cpu::extent_sigmas`.
+fn extent_sigmas(opacity: f32) -> f32 {
+    return min(3.0, sqrt(2.0 * log(opacity / MIN_ALPHA)));
 }
 
 fn cull(g: u32) {
@@ -59,7 +68,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let cam = frame.camera_near.xyz;
     let w = mat3x3<f32>(frame.view_row0.xyz, frame.view_row1.xyz, frame.view_row2.xyz); // rows as columns: w = Wᵀ
     let t = (mean - cam) * w; // row-vector product = W (mean - cam)
-    if t.z < frame.camera_near.w || opacity <= 0.0 {
+    if t.z < frame.camera_near.w || opacity < MIN_ALPHA {  // fainter than the compositing threshold everywhere
         cull(g);
         return;
     }
@@ -94,7 +103,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let conic = vec3<f32>(c / det, -b / det, a / det);
     let mid = 0.5 * (a + c);
     let lambda1 = mid + sqrt(max(0.1, mid * mid - det));
-    let radius = ceil(3.0 * sqrt(lambda1));
+    let radius = ceil(extent_sigmas(opacity) * sqrt(lambda1));
     let px = fx * t.x / tz + frame.focal_principal.z;
     let py = fy * t.y / tz + frame.focal_principal.w;
     if !(is_finite(px) && is_finite(py) && is_finite(radius)) {

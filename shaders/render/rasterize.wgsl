@@ -64,7 +64,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) loc
                 continue;
             }
             let alpha = min(0.99, xo.z * exp(power));
-            if alpha < 1.0 / 255.0 {
+            if alpha < MIN_ALPHA {
                 continue;
             }
             let next_t = t * (1.0 - alpha);

@@ -20,6 +20,13 @@ const BLOCK: u32 = 1024u;
 
 var<workgroup> partial: array<u32, 256>;
 
+// Sums saturate at 2³² − 1 instead of wrapping: tile-pair offsets past any buffer's capacity
+// then stay past it (those pairs are dropped) rather than wrapping onto valid slots.
+fn sat_add(a: u32, b: u32) -> u32 {
+    let s = a + b;
+    return select(s, 0xffffffffu, s < a);
+}
+
 fn flat_wg(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return wid.x + wid.y * nwg.x;
 }
@@ -42,7 +49,7 @@ fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) n
             x = data[idx];
         }
         v[i] = sum;
-        sum += x;
+        sum = sat_add(sum, x);
     }
     // Inclusive Hillis–Steele scan of the per-thread totals.
     partial[lid] = sum;
@@ -53,14 +60,17 @@ fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) n
             add = partial[lid - off];
         }
         workgroupBarrier();
-        partial[lid] += add;
+        partial[lid] = sat_add(partial[lid], add);
         workgroupBarrier();
     }
-    let before = partial[lid] - sum;
+    var before = 0u;
+    if lid > 0u {
+        before = partial[lid - 1u];
+    }
     for (var i = 0u; i < PER_THREAD; i++) {
         let idx = base + i;
         if idx < params.n {
-            data[idx] = before + v[i];
+            data[idx] = sat_add(before, v[i]);
         }
     }
     if lid == WG - 1u {
@@ -80,7 +90,7 @@ fn add_block_offsets(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgro
     for (var i = 0u; i < PER_THREAD; i++) {
         let idx = base + i;
         if idx < params.n {
-            data[idx] += offset;
+            data[idx] = sat_add(data[idx], offset);
         }
     }
 }

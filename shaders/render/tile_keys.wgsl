@@ -38,7 +38,9 @@ fn total() {
     var sum = 0u;
     if n > 0u {
         let s = rect_size(tile_rects[depth_order[n - 1u]]);
-        sum = offsets[n - 1u] + s.x * s.y;
+        // Saturating, like the scan (see scan.wgsl).
+        let last = offsets[n - 1u];
+        sum = select(last + s.x * s.y, 0xffffffffu, last + s.x * s.y < last);
     }
     atomicStore(&stats.intersections, sum);
     key_count[0] = min(sum, frame.key_capacity);

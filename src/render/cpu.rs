@@ -26,13 +26,23 @@ pub struct ProjectedGaussian {
     pub tile_max: (u32, u32),
 }
 
+/// Compositing skips α below this.
+pub const MIN_ALPHA: f32 = 1.0 / 255.0;
+
+/// Standard deviations the screen radius spans: 3 (SPEC §7), or the distance at which
+/// α = ω·exp(−r²/2) drops below 1/255 when that is nearer, r = sqrt(2 ln(255 ω)). The
+/// tiles this leaves out hold only pixels that compositing skips, so images are unchanged.
+pub fn extent_sigmas(opacity: f32) -> f32 {
+    (2.0 * (opacity / MIN_ALPHA).ln()).sqrt().min(3.0)
+}
+
 /// Project Gaussian `i` (SPEC §7); `None` when culled or degenerate.
 pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<ProjectedGaussian> {
     let mean = splats.means[i];
     let opacity = splats.opacities[i];
     let w = camera.world_to_camera();
     let t = w * (mean - camera.position);
-    if !mean.is_finite() || t.z < camera.near || opacity <= 0.0 {
+    if !mean.is_finite() || t.z < camera.near || opacity < MIN_ALPHA {
         return None;
     }
     let (tan_x, tan_y) = camera.tan_half_fov();
@@ -58,7 +68,7 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
     let conic = Vec3::new(c / det, -b / det, a / det);
     let mid = 0.5 * (a + c);
     let lambda1 = mid + (mid * mid - det).max(0.1).sqrt();
-    let radius = (3.0 * lambda1.sqrt()).ceil();
+    let radius = (extent_sigmas(opacity) * lambda1.sqrt()).ceil();
     let (cx, cy) = camera.principal_point();
     let xy = Vec2::new(fx * t.x / tz + cx, fy * t.y / tz + cy);
     let tiles = Vec2::new(
@@ -137,7 +147,7 @@ pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3)
             continue;
         }
         let alpha = (g.opacity * power.exp()).min(0.99);
-        if alpha < 1.0 / 255.0 {
+        if alpha < MIN_ALPHA {
             continue;
         }
         let next_t = t * (1.0 - alpha);

@@ -110,6 +110,8 @@ pub struct GpuRenderer {
     frame_buffers: Option<FrameBuffers>,
     plans: Option<Plans>,
     warned: WarnedOnce,
+    /// Upper bound on the tile pairs of a frame, below what the adapter allows.
+    pair_limit: Option<u32>,
 }
 
 #[derive(Default)]
@@ -166,7 +168,14 @@ impl GpuRenderer {
             frame_buffers: None,
             plans: None,
             warned: WarnedOnce::default(),
+            pair_limit: None,
         }
+    }
+
+    /// Cap the (tile, Gaussian) pairs of a frame below the adapter's buffer limit, to bound
+    /// memory. Past the cap the farthest Gaussians are dropped, with a warning.
+    pub fn limit_tile_pairs(&mut self, max: u32) {
+        self.pair_limit = Some(max.max(1));
     }
 
     /// Upload a set of Gaussians (replacing the previous one).
@@ -375,6 +384,9 @@ impl GpuRenderer {
             .max(count.saturating_mul(8))
             .max(1 << 16);
         let max_capacity = (gpu.max_binding() / 4).min(u64::from(u32::MAX)) as u32;
+        let max_capacity = self
+            .pair_limit
+            .map_or(max_capacity, |l| l.min(max_capacity));
         capacity = capacity.min(max_capacity);
         loop {
             self.ensure_frame_buffers(gpu, camera.width, camera.height, capacity);

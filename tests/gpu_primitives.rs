@@ -1,0 +1,153 @@
+//! The renderer's GPU building blocks against plain CPU versions: the prefix sum (with its
+//! saturation) and the stable radix sort.
+
+use splatter::gpu::GpuContext;
+use splatter::render::gpu::radix_sort::{RadixSort, SortBuffers};
+use splatter::render::gpu::read_buffer;
+use splatter::render::gpu::scan::Scan;
+use splatter::rng::SplitMix64;
+use wgpu::util::DeviceExt;
+
+fn gpu() -> GpuContext {
+    GpuContext::new(None).expect("a wgpu adapter (install mesa-vulkan-drivers)")
+}
+
+fn upload(gpu: &GpuContext, data: &[u32]) -> wgpu::Buffer {
+    let padded: Vec<u32> = if data.is_empty() {
+        vec![0]
+    } else {
+        data.to_vec()
+    };
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("test data"),
+            contents: bytemuck::cast_slice(&padded),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+        })
+}
+
+fn download(gpu: &GpuContext, buffer: &wgpu::Buffer, n: usize) -> Vec<u32> {
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test readback"),
+        size: buffer.size(),
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
+    gpu.queue.submit([enc.finish()]);
+    let bytes = read_buffer(gpu, &staging).unwrap();
+    bytemuck::cast_slice::<u8, u32>(&bytes)[..n].to_vec()
+}
+
+fn exclusive_scan(data: &[u32]) -> Vec<u32> {
+    let mut sum = 0u32;
+    data.iter()
+        .map(|x| {
+            let before = sum;
+            sum = sum.saturating_add(*x);
+            before
+        })
+        .collect()
+}
+
+#[test]
+fn scan_matches_cpu_across_block_levels() {
+    let gpu = gpu();
+    let scan = Scan::new(&gpu.device);
+    let mut rng = SplitMix64::new(3);
+    // 1024 per block, 1024 blocks per level: these sizes use one, two and three levels.
+    for n in [
+        1usize,
+        5,
+        1023,
+        1024,
+        1025,
+        4096 + 17,
+        1_048_576 + 3,
+        1_500_000,
+    ] {
+        let data: Vec<u32> = (0..n).map(|_| (rng.next_u64() % 20) as u32).collect();
+        let buffer = upload(&gpu, &data);
+        let plan = scan.plan(&gpu.device, &buffer, n as u32);
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        scan.record(&mut enc, &plan);
+        gpu.queue.submit([enc.finish()]);
+        assert_eq!(download(&gpu, &buffer, n), exclusive_scan(&data), "n = {n}");
+    }
+}
+
+#[test]
+fn scan_saturates_instead_of_wrapping() {
+    let gpu = gpu();
+    let scan = Scan::new(&gpu.device);
+    // Overflow inside a thread, across threads and across blocks.
+    let mut data = vec![0u32; 3000];
+    data[0] = 0xF000_0000;
+    data[1] = 0x2000_0000;
+    data[700] = 7;
+    data[2500] = 0x1000_0000;
+    let buffer = upload(&gpu, &data);
+    let plan = scan.plan(&gpu.device, &buffer, data.len() as u32);
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    scan.record(&mut enc, &plan);
+    gpu.queue.submit([enc.finish()]);
+    let got = download(&gpu, &buffer, data.len());
+    assert_eq!(got[1], 0xF000_0000);
+    assert!(
+        got[2..].iter().all(|v| *v == u32::MAX),
+        "offsets after the overflow stay saturated"
+    );
+}
+
+#[test]
+fn radix_sort_is_a_stable_sort() {
+    let gpu = gpu();
+    let scan = Scan::new(&gpu.device);
+    let sort = RadixSort::new(&gpu.device);
+    let mut rng = SplitMix64::new(11);
+    for (n, bits, capacity) in [
+        (1usize, 4u32, 10u32),
+        (777, 8, 2048),
+        (5000, 13, 9000),
+        (300_000, 32, 300_000),
+    ] {
+        // Few distinct keys relative to n, so stability is exercised.
+        let mask = if bits == 32 {
+            u32::MAX
+        } else {
+            (1u32 << bits) - 1
+        };
+        let keys: Vec<u32> = (0..n)
+            .map(|_| (rng.next_u64() as u32) & mask & !0xF0)
+            .collect();
+        let values: Vec<u32> = (0..n as u32).collect();
+        let mut padded_keys = keys.clone();
+        padded_keys.resize(capacity as usize, 0xDEAD);
+        let mut padded_values = values.clone();
+        padded_values.resize(capacity as usize, 0xBEEF);
+        let (k, v) = (upload(&gpu, &padded_keys), upload(&gpu, &padded_values));
+        let (ka, va) = (upload(&gpu, &padded_keys), upload(&gpu, &padded_values));
+        let count = upload(&gpu, &[n as u32]);
+        let buffers = SortBuffers {
+            count: &count,
+            keys: &k,
+            values: &v,
+            keys_alt: &ka,
+            values_alt: &va,
+        };
+        let plan = sort.plan(&gpu.device, &scan, &buffers, capacity, bits);
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        sort.record(&mut enc, &scan, &plan);
+        gpu.queue.submit([enc.finish()]);
+        let mut expected: Vec<(u32, u32)> =
+            keys.iter().copied().zip(values.iter().copied()).collect();
+        expected.sort_by_key(|(key, _)| *key); // stable
+        let got_keys = download(&gpu, &k, n);
+        let got_values = download(&gpu, &v, n);
+        let got: Vec<(u32, u32)> = got_keys.into_iter().zip(got_values).collect();
+        assert_eq!(got, expected, "n = {n}, {bits} bits");
+    }
+}
