@@ -72,3 +72,44 @@ const MIN_ALPHA: f32 = 1.0 / 255.0;
 fn flat_workgroup(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return wid.x + wid.y * nwg.x;
 }
+
+// How many standard deviations a Gaussian's footprint spans: 3 (SPEC §7), or fewer when
+// its α = ω·exp(−r²/2) already falls below MIN_ALPHA inside 3σ, at r = sqrt(2 ln(255 ω)).
+// Beyond that compositing skips every pixel, so the image does not change while faint
+// Gaussians touch fewer tiles. Mirrors `render::cpu::extent_sigmas`.
+fn extent_sigmas(opacity: f32) -> f32 {
+    return min(3.0, sqrt(2.0 * log(opacity / MIN_ALPHA)));
+}
+
+// dᵀ C d for the conic C = [[a, b], [b, c]] stored as (a, b, c).
+fn conic_form(d: vec2<f32>, conic: vec3<f32>) -> f32 {
+    return conic.x * d.x * d.x + 2.0 * conic.y * d.x * d.y + conic.z * d.y * d.y;
+}
+
+// Smallest dᵀ C d over the segment d0 + t e, t in [0, 1] (a 1D quadratic in t).
+fn conic_min_on_segment(d0: vec2<f32>, e: vec2<f32>, conic: vec3<f32>) -> f32 {
+    let ce = vec2<f32>(conic.x * e.x + conic.y * e.y, conic.y * e.x + conic.z * e.y);
+    let t = clamp(-dot(ce, d0) / dot(e, ce), 0.0, 1.0);
+    return conic_form(d0 + t * e, conic);
+}
+
+// Does the ellipse dᵀ C d ≤ k² around `xy` reach a pixel centre of tile `tile`? Tested
+// against the rectangle spanned by the tile's pixel centres: either the mean lies inside
+// it, or the ellipse crosses one of its four edges. Tiles that only the ellipse's bounding
+// square reaches are left out (a large share for elongated, deformed Gaussians).
+// Mirrors `render::cpu::ellipse_touches_tile`.
+fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32>) -> bool {
+    let lo = vec2<f32>(tile * TILE) + 0.5;
+    let span = f32(TILE - 1u);
+    let hi = lo + span;
+    if all(xy >= lo) && all(xy <= hi) {
+        return true;
+    }
+    let d = lo - xy;
+    let m = min(
+        min(conic_min_on_segment(d, vec2<f32>(span, 0.0), conic),
+            conic_min_on_segment(d + vec2<f32>(0.0, span), vec2<f32>(span, 0.0), conic)),
+        min(conic_min_on_segment(d, vec2<f32>(0.0, span), conic),
+            conic_min_on_segment(d + vec2<f32>(span, 0.0), vec2<f32>(0.0, span), conic)));
+    return m <= k2;
+}

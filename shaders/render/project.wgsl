@@ -25,14 +25,6 @@ fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     return v + q.w * t + cross(u, t);
 }
 
-// How many standard deviations the screen radius spans: 3 (SPEC §7), or fewer when the
-// Gaussian's α = ω·exp(−r²/2) already falls below 1/255 inside 3σ, at r = sqrt(2 ln(255 ω)).
-// Tiles this drops hold only pixels the compositing would skip, so the image is unchanged
-// while faint Gaussians touch fewer tiles. Mirrors `render::cpu::extent_sigmas`.
-fn extent_sigmas(opacity: f32) -> f32 {
-    return min(3.0, sqrt(2.0 * log(opacity / MIN_ALPHA)));
-}
-
 fn cull(g: u32) {
     tile_rects[g] = vec2<u32>(0u, 0u);
     depth_keys[g] = CULLED_KEY;

@@ -1,5 +1,6 @@
 // Tile keys: after the depth sort, every visible Gaussian writes one (tile, Gaussian) pair
-// per tile its rectangle touches, in depth order, so that a stable sort by tile keeps
+// per tile of its rectangle that its footprint ellipse reaches (`ellipse_touches_tile`),
+// in depth order, so that a stable sort by tile keeps
 // each tile's list front to back. If the pairs exceed the buffers' capacity the farthest
 // Gaussians are dropped (they come last) and the overflow is counted.
 
@@ -12,11 +13,42 @@
 @group(0) @binding(5) var<storage, read_write> tile_values: array<u32>;
 @group(0) @binding(6) var<storage, read_write> key_count: array<u32>;
 @group(0) @binding(7) var<storage, read_write> stats: Stats;
+@group(0) @binding(8) var<storage, read> projected: array<Projected>;
 
-fn rect_size(r: vec2<u32>) -> vec2<u32> {
-    let mn = vec2<u32>(r.x & 0xffffu, r.x >> 16u);
-    let mx = vec2<u32>(r.y & 0xffffu, r.y >> 16u);
-    return mx - mn;
+// The footprint of Gaussian g: its tile rectangle [mn, mx), mean, conic and k².
+struct Footprint {
+    mn: vec2<u32>,
+    mx: vec2<u32>,
+    xy: vec2<f32>,
+    conic: vec3<f32>,
+    k2: f32,
+}
+
+fn footprint(g: u32) -> Footprint {
+    let r = tile_rects[g];
+    var f: Footprint;
+    f.mn = vec2<u32>(r.x & 0xffffu, r.x >> 16u);
+    f.mx = vec2<u32>(r.y & 0xffffu, r.y >> 16u);
+    if any(f.mx <= f.mn) {
+        return f; // culled: projected[g] was not written
+    }
+    let p = projected[g];
+    f.xy = p.xy_opacity.xy;
+    f.conic = p.conic.xyz;
+    let k = extent_sigmas(p.xy_opacity.z);
+    f.k2 = k * k;
+    return f;
+}
+
+// Tiles of the rectangle that the footprint ellipse reaches.
+fn tile_count(f: Footprint) -> u32 {
+    var count = 0u;
+    for (var y = f.mn.y; y < f.mx.y; y++) {
+        for (var x = f.mn.x; x < f.mx.x; x++) {
+            count += u32(ellipse_touches_tile(f.xy, f.conic, f.k2, vec2<u32>(x, y)));
+        }
+    }
+    return count;
 }
 
 // Entry 1: tile counts in depth order (to be scanned).
@@ -27,8 +59,7 @@ fn gather_counts(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups)
     if j >= frame.num_gaussians {
         return;
     }
-    let s = rect_size(tile_rects[depth_order[j]]);
-    offsets[j] = s.x * s.y;
+    offsets[j] = tile_count(footprint(depth_order[j]));
 }
 
 // Entry 2 (one thread, after the scan): the total number of pairs and how many fit.
@@ -37,10 +68,10 @@ fn total() {
     let n = frame.num_gaussians;
     var sum = 0u;
     if n > 0u {
-        let s = rect_size(tile_rects[depth_order[n - 1u]]);
         // Saturating, like the scan (see scan.wgsl).
         let last = offsets[n - 1u];
-        sum = select(last + s.x * s.y, 0xffffffffu, last + s.x * s.y < last);
+        let more = last + tile_count(footprint(depth_order[n - 1u]));
+        sum = select(more, 0xffffffffu, more < last);
     }
     atomicStore(&stats.intersections, sum);
     key_count[0] = min(sum, frame.key_capacity);
@@ -55,12 +86,13 @@ fn emit(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     let g = depth_order[j];
-    let r = tile_rects[g];
-    let mn = vec2<u32>(r.x & 0xffffu, r.x >> 16u);
-    let mx = vec2<u32>(r.y & 0xffffu, r.y >> 16u);
+    let f = footprint(g);
     var k = offsets[j];
-    for (var y = mn.y; y < mx.y; y++) {
-        for (var x = mn.x; x < mx.x; x++) {
+    for (var y = f.mn.y; y < f.mx.y; y++) {
+        for (var x = f.mn.x; x < f.mx.x; x++) {
+            if !ellipse_touches_tile(f.xy, f.conic, f.k2, vec2<u32>(x, y)) {
+                continue;
+            }
             if k >= frame.key_capacity {
                 return;
             }

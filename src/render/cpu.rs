@@ -36,6 +36,44 @@ pub fn extent_sigmas(opacity: f32) -> f32 {
     (2.0 * (opacity / MIN_ALPHA).ln()).sqrt().min(3.0)
 }
 
+/// dᵀ C d for the conic C = [[a, b], [b, c]] stored as (a, b, c).
+fn conic_form(d: Vec2, conic: Vec3) -> f32 {
+    conic.x * d.x * d.x + 2.0 * conic.y * d.x * d.y + conic.z * d.y * d.y
+}
+
+/// Smallest dᵀ C d over the segment d0 + t e, t ∈ [0, 1].
+fn conic_min_on_segment(d0: Vec2, e: Vec2, conic: Vec3) -> f32 {
+    let ce = Vec2::new(conic.x * e.x + conic.y * e.y, conic.y * e.x + conic.z * e.y);
+    let t = (-ce.dot(d0) / e.dot(ce)).clamp(0.0, 1.0);
+    conic_form(d0 + t * e, conic)
+}
+
+/// Does the footprint ellipse dᵀ C d ≤ k² reach the rectangle spanned by the pixel centres
+/// of tile (tx, ty)? The mean inside it, or the ellipse crossing one of its edges.
+pub fn ellipse_touches_tile(xy: Vec2, conic: Vec3, k2: f32, tx: u32, ty: u32) -> bool {
+    let lo = Vec2::new((tx * TILE) as f32, (ty * TILE) as f32) + 0.5;
+    let span = (TILE - 1) as f32;
+    let hi = lo + span;
+    if xy.cmpge(lo).all() && xy.cmple(hi).all() {
+        return true;
+    }
+    let d = lo - xy;
+    let m = conic_min_on_segment(d, Vec2::new(span, 0.0), conic)
+        .min(conic_min_on_segment(
+            d + Vec2::new(0.0, span),
+            Vec2::new(span, 0.0),
+            conic,
+        ))
+        .min(
+            conic_min_on_segment(d, Vec2::new(0.0, span), conic).min(conic_min_on_segment(
+                d + Vec2::new(span, 0.0),
+                Vec2::new(0.0, span),
+                conic,
+            )),
+        );
+    m <= k2
+}
+
 /// Project Gaussian `i` (SPEC §7); `None` when culled or degenerate.
 pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<ProjectedGaussian> {
     let mean = splats.means[i];
@@ -139,6 +177,10 @@ pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3)
     let mut rgb = Vec3::ZERO;
     for g in list {
         if tx < g.tile_min.0 || tx >= g.tile_max.0 || ty < g.tile_min.1 || ty >= g.tile_max.1 {
+            continue;
+        }
+        let k = extent_sigmas(g.opacity);
+        if !ellipse_touches_tile(g.xy, g.conic, k * k, tx, ty) {
             continue;
         }
         let d = g.xy - centre;

@@ -311,9 +311,15 @@ impl GpuRenderer {
                 ],
             ),
             depth_sort,
-            gather: self.tile_keys.gather.bind(
+            gather: self.tile_keys.gather.bind_at(
                 device,
-                &[&self.frame, &s.tile_rects, &s.depth_order, &s.offsets],
+                &[
+                    (0, &self.frame),
+                    (1, &s.tile_rects),
+                    (2, &s.depth_order),
+                    (3, &s.offsets),
+                    (8, &s.projected),
+                ],
             ),
             offsets_scan: self.scan.plan(device, &s.offsets, s.count),
             total: self.tile_keys.total.bind_at(
@@ -325,17 +331,19 @@ impl GpuRenderer {
                     (3, &s.offsets),
                     (6, &f.key_count),
                     (7, &self.stats),
+                    (8, &s.projected),
                 ],
             ),
-            emit: self.tile_keys.emit.bind(
+            emit: self.tile_keys.emit.bind_at(
                 device,
                 &[
-                    &self.frame,
-                    &s.tile_rects,
-                    &s.depth_order,
-                    &s.offsets,
-                    &f.tile_keys,
-                    &f.tile_values,
+                    (0, &self.frame),
+                    (1, &s.tile_rects),
+                    (2, &s.depth_order),
+                    (3, &s.offsets),
+                    (4, &f.tile_keys),
+                    (5, &f.tile_values),
+                    (8, &s.projected),
                 ],
             ),
             tile_sort,
