@@ -78,9 +78,9 @@ pub struct GpuContext {
     errors: Arc<Mutex<Option<String>>>,
 }
 
-fn instance(backend: Option<BackendChoice>) -> wgpu::Instance {
+fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = backend.map_or(wgpu::Backends::all(), BackendChoice::backends);
+    desc.backends = backends;
     // The GL backend on Linux needs no window for compute work.
     desc.flags = wgpu::InstanceFlags::default();
     wgpu::Instance::new(desc)
@@ -101,18 +101,15 @@ fn preference(info: &wgpu::AdapterInfo) -> u32 {
 }
 
 /// All adapters visible to wgpu for `backends`, best first.
-fn enumerate(backend: Option<BackendChoice>, backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
-    let mut list = pollster::block_on(instance(backend).enumerate_adapters(backends));
+fn enumerate(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let mut list = pollster::block_on(instance(backends).enumerate_adapters(backends));
     list.sort_by_key(|a| std::cmp::Reverse(preference(&a.get_info())));
     list
 }
 
 /// All adapters visible to wgpu (or to the forced backend), best first.
 pub fn adapters(backend: Option<BackendChoice>) -> Vec<wgpu::Adapter> {
-    enumerate(
-        backend,
-        backend.map_or(wgpu::Backends::all(), BackendChoice::backends),
-    )
+    enumerate(backend.map_or(wgpu::Backends::all(), BackendChoice::backends))
 }
 
 /// The adapters to choose from: those of the forced backend, else Vulkan/Metal/DX12 ones,
@@ -121,9 +118,9 @@ fn candidates(backend: Option<BackendChoice>) -> Vec<wgpu::Adapter> {
     if backend.is_some() {
         return adapters(backend);
     }
-    let primary = enumerate(None, wgpu::Backends::PRIMARY);
+    let primary = enumerate(wgpu::Backends::PRIMARY);
     if primary.is_empty() {
-        enumerate(None, wgpu::Backends::GL)
+        enumerate(wgpu::Backends::GL)
     } else {
         primary
     }

@@ -226,11 +226,26 @@ impl GpuRenderer {
         Ok(())
     }
 
-    fn ensure_frame_buffers(&mut self, gpu: &GpuContext, width: u32, height: u32, capacity: u32) {
+    fn ensure_frame_buffers(
+        &mut self,
+        gpu: &GpuContext,
+        width: u32,
+        height: u32,
+        capacity: u32,
+    ) -> Result<(), GpuError> {
         if let Some(f) = &self.frame_buffers {
             if f.width == width && f.height == height && f.capacity >= capacity {
-                return;
+                return Ok(());
             }
+        }
+        let image_bytes = u64::from(width) * u64::from(height) * 4;
+        if image_bytes > gpu.max_binding() {
+            return Err(GpuError::TooLarge {
+                what: format!("a {width}×{height} image"),
+                needed: image_bytes,
+                limit: gpu.max_binding(),
+                advice: "render a smaller image (--width/--height)".into(),
+            });
         }
         let device = &gpu.device;
         let tiles = u64::from(width.div_ceil(TILE)) * u64::from(height.div_ceil(TILE));
@@ -260,6 +275,7 @@ impl GpuRenderer {
             stats_readback: readback("stats readback", std::mem::size_of::<Stats>() as u64),
         });
         self.plans = None;
+        Ok(())
     }
 
     fn ensure_plans(&mut self, gpu: &GpuContext) {
@@ -397,7 +413,7 @@ impl GpuRenderer {
             .map_or(max_capacity, |l| l.min(max_capacity));
         capacity = capacity.min(max_capacity);
         loop {
-            self.ensure_frame_buffers(gpu, camera.width, camera.height, capacity);
+            self.ensure_frame_buffers(gpu, camera.width, camera.height, capacity)?;
             self.ensure_plans(gpu);
             let (image, timings) = self.render_once(gpu, camera, background)?;
             let wanted = image.stats.intersections;
