@@ -6,7 +6,6 @@ use std::time::Instant;
 
 use anyhow::Result;
 use glam::{Mat3, Quat, Vec3};
-use image::ImageEncoder;
 
 use crate::gpu::GpuContext;
 use crate::render::splats::sym3_from_mat3;
@@ -70,10 +69,12 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// Milliseconds per frame for 100k and 1M Gaussians (degree 3) at 1920×1080 and 100k at
 /// 640×360: render passes (submit to GPU idle), readback, and PNG encoding, separately.
+/// With `per_pass`, one more frame per case is rendered pass by pass and broken down.
 pub fn render_bench(
     gpu: &GpuContext,
     repeat: usize,
     quick: bool,
+    per_pass: bool,
     out: &mut dyn Write,
 ) -> Result<()> {
     writeln!(out, "adapter: {}", gpu.describe())?;
@@ -110,18 +111,7 @@ pub fn render_bench(
             render.push(t.render_ms);
             readback.push(t.readback_ms);
             let start = Instant::now();
-            let mut bytes = Vec::new();
-            let rgb: Vec<u8> = image
-                .rgba
-                .chunks_exact(4)
-                .flat_map(|p| [p[0], p[1], p[2]])
-                .collect();
-            image::codecs::png::PngEncoder::new(&mut bytes).write_image(
-                &rgb,
-                w,
-                h,
-                image::ExtendedColorType::Rgb8,
-            )?;
+            crate::output::encode_png(w, h, &image.rgba)?;
             png.push(start.elapsed().as_secs_f64() * 1e3);
         }
         writeln!(
@@ -134,6 +124,22 @@ pub fn render_bench(
             median(&mut png),
             image.stats.intersections
         )?;
+        if per_pass {
+            renderer.profile_passes(true);
+            let (_, t) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
+            renderer.profile_passes(false);
+            let list: Vec<String> = t
+                .passes
+                .iter()
+                .map(|(name, ms)| format!("{name} {ms:.2}"))
+                .collect();
+            writeln!(
+                out,
+                "{:>22} per pass (ms, each waited for): {}",
+                "",
+                list.join(", ")
+            )?;
+        }
         out.flush()?;
     }
     Ok(())

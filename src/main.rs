@@ -55,6 +55,9 @@ enum BenchWhat {
         /// Only the small cases (100k Gaussians), for a quick check.
         #[arg(long)]
         quick: bool,
+        /// Also break each case down by pass (one extra frame, each pass waited for).
+        #[arg(long)]
+        per_pass: bool,
     },
 }
 
@@ -134,10 +137,21 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Some(Command::Bench {
-            what: BenchWhat::Render { repeat, quick },
+            what:
+                BenchWhat::Render {
+                    repeat,
+                    quick,
+                    per_pass,
+                },
         }) => {
             let gpu = GpuContext::new(cli.backend)?;
-            splatter::bench::render_bench(&gpu, repeat.max(1), quick, &mut std::io::stdout())
+            splatter::bench::render_bench(
+                &gpu,
+                repeat.max(1),
+                quick,
+                per_pass,
+                &mut std::io::stdout(),
+            )
         }
     }
 }

@@ -68,31 +68,24 @@ impl Kernel {
     }
 
     /// Record one dispatch of `groups` workgroups (split over x and y, see [`dispatch_1d`]).
-    pub fn dispatch(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        bind: &wgpu::BindGroup,
-        groups: u32,
-    ) {
+    /// Dispatches recorded in one compute pass still see each other's writes in order:
+    /// every dispatch is its own synchronisation scope.
+    pub fn dispatch(&self, cpass: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, groups: u32) {
         let (x, y) = dispatch_1d(groups);
-        self.dispatch_2d(encoder, bind, x, y);
+        self.dispatch_2d(cpass, bind, x, y);
     }
 
     /// Record a dispatch of an explicit 2D grid of workgroups.
     pub fn dispatch_2d(
         &self,
-        encoder: &mut wgpu::CommandEncoder,
+        cpass: &mut wgpu::ComputePass,
         bind: &wgpu::BindGroup,
         x: u32,
         y: u32,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(self.label),
-            timestamp_writes: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind, &[]);
-        pass.dispatch_workgroups(x, y, 1);
+        cpass.set_pipeline(&self.pipeline);
+        cpass.set_bind_group(0, bind, &[]);
+        cpass.dispatch_workgroups(x, y, 1);
     }
 }
 

@@ -36,35 +36,39 @@ pub fn frame_path(dir: &Path, frame: u32) -> PathBuf {
     dir.join(format!("frame_{frame:05}.png"))
 }
 
-/// Encode an RGBA8 image as an RGB PNG at `path`, atomically (temporary name, then rename).
-pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), OutputError> {
+/// Encode an RGBA8 image as an RGB PNG (the alpha channel is always opaque).
+pub fn encode_png(width: u32, height: u32, rgba: &[u8]) -> Result<Vec<u8>, image::ImageError> {
+    use image::ImageEncoder;
     let rgb: Vec<u8> = rgba
         .chunks_exact(4)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    let tmp = temporary_name(path);
-    let result = image::save_buffer_with_format(
-        &tmp,
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(
         &rgb,
         width,
         height,
         image::ExtendedColorType::Rgb8,
-        image::ImageFormat::Png,
-    );
-    if let Err(source) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(match source {
-            image::ImageError::IoError(source) => OutputError::Write {
-                path: path.to_owned(),
-                source,
-            },
-            source => OutputError::Encode {
-                path: path.to_owned(),
-                source,
-            },
-        });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
+    )?;
+    Ok(bytes)
+}
+
+/// Encode an RGBA8 image as an RGB PNG at `path`, atomically (temporary name, then rename).
+pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<(), OutputError> {
+    let bytes = encode_png(width, height, rgba).map_err(|source| OutputError::Encode {
+        path: path.to_owned(),
+        source,
+    })?;
+    write_atomically(path, &bytes)
+}
+
+/// Write `bytes` to a hidden temporary file beside `path`, then rename it to `path`, so
+/// that `path` is never seen partly written (a crash or a full disk leaves the old file, or
+/// none).
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let tmp = temporary_name(path);
+    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    result.map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
         OutputError::Write {
             path: path.to_owned(),

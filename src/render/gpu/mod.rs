@@ -44,12 +44,14 @@ pub struct RenderedImage {
 }
 
 /// Wall-clock timings of one frame, in milliseconds.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct FrameTimings {
     /// Recording + GPU execution of all render passes (until the GPU is idle).
     pub render_ms: f64,
     /// Copy to the readback buffer, map, and copy out.
     pub readback_ms: f64,
+    /// Per pass, when [`GpuRenderer::profile_passes`] is on.
+    pub passes: Vec<(&'static str, f64)>,
 }
 
 /// Buffers that depend on the number of Gaussians.
@@ -112,6 +114,7 @@ pub struct GpuRenderer {
     warned: WarnedOnce,
     /// Upper bound on the tile pairs of a frame, below what the adapter allows.
     pair_limit: Option<u32>,
+    profile: bool,
 }
 
 #[derive(Default)]
@@ -169,7 +172,14 @@ impl GpuRenderer {
             plans: None,
             warned: WarnedOnce::default(),
             pair_limit: None,
+            profile: false,
         }
+    }
+
+    /// Time each pass on its own (submit and wait after each): for benchmarks only, as it
+    /// removes the overlap between passes.
+    pub fn profile_passes(&mut self, on: bool) {
+        self.profile = on;
     }
 
     /// Cap the (tile, Gaussian) pairs of a frame below the adapter's buffer limit, to bound
@@ -312,6 +322,11 @@ impl GpuRenderer {
             f.capacity,
             tile_bits(tiles),
         );
+        let (sorted_keys, sorted_values) = if tile_sort.result_in_alternates() {
+            (&f.tile_keys_alt, &f.tile_values_alt)
+        } else {
+            (&f.tile_keys, &f.tile_values)
+        };
         self.plans = Some(Plans {
             project: self.project.kernel.bind(
                 device,
@@ -366,13 +381,13 @@ impl GpuRenderer {
             ranges: self
                 .tile_ranges
                 .kernel
-                .bind(device, &[&f.key_count, &f.tile_keys, &f.ranges]),
+                .bind(device, &[&f.key_count, sorted_keys, &f.ranges]),
             rasterize: self.rasterize.kernel.bind(
                 device,
                 &[
                     &self.frame,
                     &f.ranges,
-                    &f.tile_values,
+                    sorted_values,
                     &s.projected,
                     &f.image,
                 ],
@@ -468,6 +483,51 @@ impl GpuRenderer {
         let frame = Frame::new(camera, background, s.count, s.sh_degree, f.capacity);
         gpu.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        let groups = s.count.div_ceil(256);
+        // The frame's stages, in order. All go into one compute pass (each dispatch is its
+        // own synchronisation scope) unless passes are profiled one by one.
+        type Stage<'a> = (&'static str, Box<dyn Fn(&mut wgpu::ComputePass) + 'a>);
+        let mut stages: Vec<Stage> = Vec::new();
+        if s.count > 0 {
+            stages.push((
+                "project",
+                Box::new(|c| self.project.kernel.dispatch(c, &p.project, groups)),
+            ));
+            stages.push((
+                "depth sort",
+                Box::new(|c| self.sort.record(c, &self.scan, &p.depth_sort)),
+            ));
+            stages.push((
+                "tile keys",
+                Box::new(|c| {
+                    self.tile_keys.gather.dispatch(c, &p.gather, groups);
+                    self.scan.record(c, &p.offsets_scan);
+                    self.tile_keys.total.dispatch(c, &p.total, 1);
+                    self.tile_keys.emit.dispatch(c, &p.emit, groups);
+                }),
+            ));
+            stages.push((
+                "tile sort",
+                Box::new(|c| self.sort.record(c, &self.scan, &p.tile_sort)),
+            ));
+            stages.push((
+                "tile ranges",
+                Box::new(|c| {
+                    self.tile_ranges
+                        .kernel
+                        .dispatch(c, &p.ranges, f.capacity.div_ceil(256))
+                }),
+            ));
+        }
+        stages.push((
+            "rasterize",
+            Box::new(|c| {
+                self.rasterize
+                    .kernel
+                    .dispatch_2d(c, &p.rasterize, frame.tiles_x, frame.tiles_y)
+            }),
+        ));
+
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -475,44 +535,32 @@ impl GpuRenderer {
             });
         enc.clear_buffer(&self.stats, 0, None);
         enc.clear_buffer(&f.ranges, 0, None);
-        let groups = s.count.div_ceil(256);
-        let profile = std::env::var_os("SPLATTER_PROFILE_PASSES").is_some();
-        let mark = |enc: &mut wgpu::CommandEncoder, what: &str| -> Result<(), GpuError> {
-            if profile {
-                let done =
-                    std::mem::replace(enc, gpu.device.create_command_encoder(&Default::default()));
-                let t = std::time::Instant::now();
-                gpu.queue.submit([done.finish()]);
-                gpu.wait()?;
-                eprintln!("  pass {what}: {:.2} ms", t.elapsed().as_secs_f64() * 1e3);
-            }
-            Ok(())
-        };
-        mark(&mut enc, "clear")?;
-        if s.count > 0 {
-            self.project.kernel.dispatch(&mut enc, &p.project, groups);
-            mark(&mut enc, "project")?;
-            self.sort.record(&mut enc, &self.scan, &p.depth_sort);
-            mark(&mut enc, "depth sort")?;
-            self.tile_keys.gather.dispatch(&mut enc, &p.gather, groups);
-            self.scan.record(&mut enc, &p.offsets_scan);
-            self.tile_keys.total.dispatch(&mut enc, &p.total, 1);
-            self.tile_keys.emit.dispatch(&mut enc, &p.emit, groups);
-            mark(&mut enc, "tile keys")?;
-            self.sort.record(&mut enc, &self.scan, &p.tile_sort);
-            mark(&mut enc, "tile sort")?;
-            self.tile_ranges
-                .kernel
-                .dispatch(&mut enc, &p.ranges, f.capacity.div_ceil(256));
-            mark(&mut enc, "tile ranges")?;
-        } else {
+        if s.count == 0 {
             enc.clear_buffer(&f.key_count, 0, None);
         }
-        self.rasterize
-            .kernel
-            .dispatch_2d(&mut enc, &p.rasterize, frame.tiles_x, frame.tiles_y);
-        mark(&mut enc, "rasterize")?;
-        gpu.queue.submit([enc.finish()]);
+        let mut passes = Vec::new();
+        if self.profile {
+            gpu.queue.submit([enc.finish()]);
+            for (name, record) in &stages {
+                let t = std::time::Instant::now();
+                let mut enc = gpu.device.create_command_encoder(&Default::default());
+                record(&mut enc.begin_compute_pass(&Default::default()));
+                gpu.queue.submit([enc.finish()]);
+                gpu.wait()?;
+                passes.push((*name, t.elapsed().as_secs_f64() * 1e3));
+            }
+        } else {
+            {
+                let mut cpass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("render"),
+                    timestamp_writes: None,
+                });
+                for (_, record) in &stages {
+                    record(&mut cpass);
+                }
+            }
+            gpu.queue.submit([enc.finish()]);
+        }
         gpu.wait()?;
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
 
@@ -546,6 +594,7 @@ impl GpuRenderer {
             FrameTimings {
                 render_ms,
                 readback_ms,
+                passes,
             },
         ))
     }

@@ -25,15 +25,15 @@ struct Pass {
 /// Everything needed to sort fixed buffers of a given capacity by their low `bits` bits.
 pub struct SortPlan {
     blocks: u32,
-    /// After an odd number of passes the result is in the alternates: copy it back.
-    copy_back: Option<[(wgpu::Buffer, wgpu::Buffer); 2]>,
     passes: Vec<Pass>,
     scan: ScanPlan,
     _buffers: Vec<wgpu::Buffer>,
 }
 
-/// The buffers of one sort: `keys`/`values` hold the input and the output;
-/// `keys_alt`/`values_alt` are the ping-pong partners.
+/// The buffers of one sort: `keys`/`values` hold the input; the passes ping-pong with
+/// `keys_alt`/`values_alt`, and the output is in whichever pair the last pass wrote
+/// ([`SortPlan::result_in_alternates`]) — no copy, so that a whole sort can be recorded in
+/// one compute pass.
 pub struct SortBuffers<'a> {
     pub count: &'a wgpu::Buffer,
     pub keys: &'a wgpu::Buffer,
@@ -45,6 +45,13 @@ pub struct SortBuffers<'a> {
 /// Passes for `bits` key bits.
 pub fn pass_count(bits: u32) -> u32 {
     bits.div_ceil(BITS_PER_PASS).max(1)
+}
+
+impl SortPlan {
+    /// After an odd number of passes the sorted pairs are in `keys_alt`/`values_alt`.
+    pub fn result_in_alternates(&self) -> bool {
+        self.passes.len() % 2 == 1
+    }
 }
 
 impl RadixSort {
@@ -115,30 +122,20 @@ impl RadixSort {
             owned.push(params);
         }
         owned.push(counts);
-        let copy_back = (pass_count(bits) % 2 == 1).then(|| {
-            [
-                (buffers.keys_alt.clone(), buffers.keys.clone()),
-                (buffers.values_alt.clone(), buffers.values.clone()),
-            ]
-        });
         SortPlan {
             blocks,
-            copy_back,
             passes,
             scan: scan_plan,
             _buffers: owned,
         }
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, scan: &Scan, plan: &SortPlan) {
+    pub fn record(&self, cpass: &mut wgpu::ComputePass, scan: &Scan, plan: &SortPlan) {
         for pass in &plan.passes {
-            self.count.dispatch(encoder, &pass.count_bind, plan.blocks);
-            scan.record(encoder, &plan.scan);
+            self.count.dispatch(cpass, &pass.count_bind, plan.blocks);
+            scan.record(cpass, &plan.scan);
             self.scatter
-                .dispatch(encoder, &pass.scatter_bind, plan.blocks);
-        }
-        for (from, to) in plan.copy_back.iter().flatten() {
-            encoder.copy_buffer_to_buffer(from, 0, to, 0, None);
+                .dispatch(cpass, &pass.scatter_bind, plan.blocks);
         }
     }
 }

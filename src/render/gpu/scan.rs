@@ -87,14 +87,14 @@ impl Scan {
         }
     }
 
-    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, plan: &ScanPlan) {
+    pub fn record(&self, cpass: &mut wgpu::ComputePass, plan: &ScanPlan) {
         for level in &plan.levels {
             self.scan_blocks
-                .dispatch(encoder, &level.scan_bind, level.blocks);
+                .dispatch(cpass, &level.scan_bind, level.blocks);
         }
         for level in plan.levels.iter().rev().filter(|l| l.blocks > 1) {
             self.add_offsets
-                .dispatch(encoder, &level.add_bind, level.blocks);
+                .dispatch(cpass, &level.add_bind, level.blocks);
         }
     }
 }
