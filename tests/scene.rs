@@ -841,3 +841,15 @@ fn ply_errors_name_the_object() {
         "{msg}"
     );
 }
+
+#[test]
+fn a_schema_reference_for_editors_is_accepted() {
+    let text = splatter::scene::DEFAULT_SCENE_JSON.replacen(
+        '{',
+        "{\n  \"$schema\": \"./scene.schema.json\",",
+        1,
+    );
+    let scene =
+        splatter::scene::parse(&text, "with-schema.json", std::path::Path::new(".")).unwrap();
+    assert_eq!(scene.schema_ref.as_deref(), Some("./scene.schema.json"));
+}

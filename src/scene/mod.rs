@@ -114,6 +114,10 @@ fn one_line(s: &str) -> String {
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Scene {
+    /// Optional JSON Schema reference for editors (e.g. the output of `splatter schema`
+    /// saved to a file); ignored by splatter.
+    #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
+    pub schema_ref: Option<String>,
     /// What to write: image size, frame count and rate, background, output folder.
     pub output: OutputSpec,
     /// The camera: intrinsics and its path through the frames.
