@@ -305,7 +305,8 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     renderer.upload(&gpu, &splats)?;
     let background = Vec3::from(scene.output.background);
 
-    let mut writer = FrameWriter::new(2);
+    let workers = FrameWriter::default_workers();
+    let mut writer = FrameWriter::new(workers, 2 * workers);
     let mut progress = Progress::new(u64::from(frames.end - frames.start), "render");
     let render_start = Instant::now();
     let mut gpu_ms = 0.0;
@@ -326,12 +327,13 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let n = f64::from(frames.end - frames.start);
     let wall = render_start.elapsed().as_secs_f64();
     eprintln!(
-        "done: {} frames in {:.2} s ({:.3} s/frame; GPU render+readback {:.1} ms/frame, PNG encoding {:.1} ms/frame on a worker thread); total {:.2} s with scene build",
+        "done: {} frames in {:.2} s ({:.3} s/frame; GPU render+readback {:.1} ms/frame, PNG encoding {:.1} ms/frame on {} worker thread(s)); total {:.2} s with scene build",
         n,
         wall,
         wall / n,
         gpu_ms / n,
         encode.as_secs_f64() * 1e3 / n,
+        workers,
         started.elapsed().as_secs_f64()
     );
     Ok(())

@@ -7,8 +7,9 @@ mod progress;
 pub use progress::Progress;
 
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
+use std::sync::{mpsc, Arc, Mutex};
 use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -94,34 +95,50 @@ struct Job {
     rgba: Vec<u8>,
 }
 
-/// Encodes and writes frames on a worker thread while the GPU renders the next one.
-/// At most `depth` frames wait in the queue, so memory stays bounded.
+/// Encodes and writes frames on worker threads while the GPU renders the next ones. PNG
+/// encoding of a large frame costs more than rendering it on a GPU, so several workers share
+/// the queue (each frame is its own file, so the order of completion does not matter). At
+/// most `depth` frames wait in the queue, so memory stays bounded.
 pub struct FrameWriter {
     tx: Option<mpsc::SyncSender<Job>>,
-    worker: Option<JoinHandle<Result<Duration, OutputError>>>,
+    workers: Vec<JoinHandle<Result<Duration, OutputError>>>,
 }
 
-use std::time::{Duration, Instant};
-
 impl FrameWriter {
-    pub fn new(depth: usize) -> FrameWriter {
+    /// `workers` encoding threads (at least one) and a queue of `depth` frames.
+    pub fn new(workers: usize, depth: usize) -> FrameWriter {
         let (tx, rx) = mpsc::sync_channel::<Job>(depth);
-        let worker = std::thread::spawn(move || {
-            let mut busy = Duration::ZERO;
-            for job in rx {
-                let start = Instant::now();
-                write_png(&job.path, job.width, job.height, &job.rgba)?;
-                busy += start.elapsed();
-            }
-            Ok(busy)
-        });
+        let rx = Arc::new(Mutex::new(rx));
+        let workers = (0..workers.max(1))
+            .map(|_| {
+                let rx = Arc::clone(&rx);
+                std::thread::spawn(move || {
+                    let mut busy = Duration::ZERO;
+                    loop {
+                        // The lock is held only while taking a job, not while encoding it.
+                        let job = rx.lock().unwrap_or_else(|p| p.into_inner()).recv();
+                        let Ok(job) = job else { return Ok(busy) };
+                        let start = Instant::now();
+                        write_png(&job.path, job.width, job.height, &job.rgba)?;
+                        busy += start.elapsed();
+                    }
+                })
+            })
+            .collect();
         FrameWriter {
             tx: Some(tx),
-            worker: Some(worker),
+            workers,
         }
     }
 
-    /// Queue a frame. Fails if an earlier write failed (the error is returned by `finish`).
+    /// Workers for this machine: the cores left after the rendering thread, at most 8.
+    pub fn default_workers() -> usize {
+        std::thread::available_parallelism()
+            .map_or(1, |n| n.get().saturating_sub(1))
+            .clamp(1, 8)
+    }
+
+    /// Queue a frame. Fails if a write failed (with that write's error).
     pub fn submit(
         &mut self,
         path: PathBuf,
@@ -129,6 +146,10 @@ impl FrameWriter {
         height: u32,
         rgba: Vec<u8>,
     ) -> Result<(), OutputError> {
+        if self.workers.iter().any(|w| w.is_finished()) {
+            // A worker only stops early on an error: report it now rather than at the end.
+            return Err(self.join().err().unwrap_or(OutputError::WriterGone));
+        }
         let tx = self.tx.as_ref().ok_or(OutputError::WriterGone)?;
         if tx
             .send(Job {
@@ -139,29 +160,42 @@ impl FrameWriter {
             })
             .is_err()
         {
-            // The worker stopped: report its error.
             return Err(self.join().err().unwrap_or(OutputError::WriterGone));
         }
         Ok(())
     }
 
-    /// Wait for every queued frame; returns the time spent encoding and writing.
+    /// Wait for every queued frame; returns the time spent encoding and writing (summed
+    /// over the workers).
     pub fn finish(mut self) -> Result<Duration, OutputError> {
         self.join()
     }
 
     fn join(&mut self) -> Result<Duration, OutputError> {
         self.tx = None;
-        match self.worker.take() {
-            Some(w) => w.join().map_err(|_| OutputError::WriterGone)?,
-            None => Err(OutputError::WriterGone),
+        if self.workers.is_empty() {
+            return Err(OutputError::WriterGone);
         }
+        let mut busy = Duration::ZERO;
+        let mut first_error = None;
+        for worker in self.workers.drain(..) {
+            match worker.join() {
+                Ok(Ok(d)) => busy += d,
+                Ok(Err(e)) => {
+                    first_error.get_or_insert(e);
+                }
+                Err(_) => {
+                    first_error.get_or_insert(OutputError::WriterGone);
+                }
+            }
+        }
+        first_error.map_or(Ok(busy), Err)
     }
 }
 
 impl Drop for FrameWriter {
     fn drop(&mut self) {
-        if self.worker.is_some() {
+        if !self.workers.is_empty() {
             let _ = self.join();
         }
     }
@@ -190,7 +224,7 @@ mod tests {
 
     #[test]
     fn writer_reports_an_unwritable_directory() {
-        let mut w = FrameWriter::new(2);
+        let mut w = FrameWriter::new(2, 2);
         let bad = PathBuf::from("/nonexistent-dir-for-splatter-test/frame_00000.png");
         let _ = w.submit(bad, 1, 1, vec![0, 0, 0, 255]);
         let err = w.finish().unwrap_err();
