@@ -414,6 +414,9 @@ impl GpuRenderer {
         camera: &Camera,
         background: Vec3,
     ) -> Result<(RenderedImage, FrameTimings), GpuError> {
+        if self.splats.is_none() {
+            self.upload(gpu, &Splats::default())?;
+        }
         let count = self.splats.as_ref().map_or(0, |s| s.count);
         // Start from a guess of 8 tiles per Gaussian; grow to what a frame needed.
         let mut capacity = self
