@@ -1,0 +1,224 @@
+//! Elastic constitutive models (SPEC §3): Lamé parameters and Kirchhoff stresses τ(F).
+//!
+//! The MPM step (SPEC §2) needs the Kirchhoff stress τ = P Fᵀ = J σ_Cauchy, which both
+//! models here give in closed form. Both are objective (τ(RF) = R τ(F) Rᵀ) and isotropic;
+//! their small-strain limit is linear elasticity τ ≈ λ tr(ε) I + 2μ ε.
+
+use glam::{DMat3, DVec3};
+
+use super::svd::{polar, svd3};
+
+/// Lamé parameters μ (`mu`, shear modulus) and λ (`lambda`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lame {
+    pub mu: f64,
+    pub lambda: f64,
+}
+
+impl Lame {
+    /// SPEC §3: μ = E / (2(1 + ν)), λ = Eν / ((1 + ν)(1 − 2ν)). Needs −1 < ν < ½.
+    pub fn from_young_poisson(e: f64, nu: f64) -> Self {
+        Lame {
+            mu: e / (2.0 * (1.0 + nu)),
+            lambda: e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu)),
+        }
+    }
+
+    /// Bulk modulus κ = λ + 2μ/3 = E / (3(1 − 2ν)) (SPEC §3).
+    pub fn kappa(&self) -> f64 {
+        self.lambda + 2.0 * self.mu / 3.0
+    }
+
+    /// P-wave modulus λ + 2μ, for the CFL sound speed c = sqrt((λ + 2μ)/ρ) (SPEC §2).
+    pub fn p_wave_modulus(&self) -> f64 {
+        self.lambda + 2.0 * self.mu
+    }
+}
+
+/// The elastic models of SPEC §3.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ElasticModel {
+    /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I.
+    FixedCorotated,
+    /// Borden form: τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I.
+    NeoHookean,
+}
+
+/// Deviatoric part `A − tr(A)/3 I`.
+pub fn dev(a: DMat3) -> DMat3 {
+    let tr = a.x_axis.x + a.y_axis.y + a.z_axis.z;
+    a - DMat3::IDENTITY * (tr / 3.0)
+}
+
+/// Fixed-corotated Kirchhoff stress (SPEC §3): τ = 2μ (F − R) Fᵀ + λ (J − 1) J I, with R
+/// the rotation of the polar decomposition (a proper rotation even if det F < 0).
+pub fn kirchhoff_fixed_corotated(f: DMat3, lame: &Lame) -> DMat3 {
+    let (r, _) = polar(f);
+    let j = f.determinant();
+    (f - r) * f.transpose() * (2.0 * lame.mu) + DMat3::IDENTITY * (lame.lambda * (j - 1.0) * j)
+}
+
+/// Neo-Hookean (Borden form) Kirchhoff stress (SPEC §3):
+/// τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I. Needs J > 0.
+pub fn kirchhoff_neo_hookean(f: DMat3, lame: &Lame) -> DMat3 {
+    let j = f.determinant();
+    let b = f * f.transpose();
+    dev(b) * (lame.mu * j.powf(-2.0 / 3.0))
+        + DMat3::IDENTITY * (0.5 * lame.kappa() * (j * j - 1.0))
+}
+
+/// Kirchhoff stress of `model`.
+pub fn kirchhoff(model: ElasticModel, f: DMat3, lame: &Lame) -> DMat3 {
+    match model {
+        ElasticModel::FixedCorotated => kirchhoff_fixed_corotated(f, lame),
+        ElasticModel::NeoHookean => kirchhoff_neo_hookean(f, lame),
+    }
+}
+
+/// Strain energy density ψ(F) per unit rest volume, for testing τ = (∂ψ/∂F) Fᵀ.
+/// Fixed corotated: μ Σ(σᵢ − 1)² + λ/2 (J − 1)²; Neo-Hookean (SPEC §3):
+/// μ/2 (tr(J^(−2/3) F Fᵀ) − 3) + κ/2 ((J² − 1)/2 − ln J).
+pub fn energy_density(model: ElasticModel, f: DMat3, lame: &Lame) -> f64 {
+    let j = f.determinant();
+    match model {
+        ElasticModel::FixedCorotated => {
+            let d = svd3(f).sigma - DVec3::ONE;
+            lame.mu * d.length_squared() + 0.5 * lame.lambda * (j - 1.0) * (j - 1.0)
+        }
+        ElasticModel::NeoHookean => {
+            let tr_b = (f * f.transpose()).to_cols_array()[..].iter().step_by(4).sum::<f64>();
+            0.5 * lame.mu * (j.powf(-2.0 / 3.0) * tr_b - 3.0)
+                + 0.5 * lame.kappa() * (0.5 * (j * j - 1.0) - j.ln())
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use glam::DQuat;
+
+    const MODELS: [ElasticModel; 2] = [ElasticModel::FixedCorotated, ElasticModel::NeoHookean];
+
+    fn max_abs(m: DMat3) -> f64 {
+        m.to_cols_array().iter().fold(0.0, |a, x| a.max(x.abs()))
+    }
+
+    fn random_matrix(r: &mut SplitMix64, amp: f64) -> DMat3 {
+        DMat3::from_cols_array(&[0.0; 9].map(|_: f64| amp * (2.0 * r.uniform() - 1.0)))
+    }
+
+    fn random_rotation(r: &mut SplitMix64) -> DMat3 {
+        let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
+        DMat3::from_quat(DQuat::from_xyzw(v.x, v.y, v.z, r.uniform() - 0.5).normalize())
+    }
+
+    fn lame() -> Lame {
+        Lame::from_young_poisson(2000.0, 0.38)
+    }
+
+    #[test]
+    fn lame_parameters() {
+        let l = Lame::from_young_poisson(1000.0, 0.25);
+        assert!((l.mu - 400.0).abs() < 1e-12 && (l.lambda - 400.0).abs() < 1e-12);
+        let l = lame();
+        assert!((l.kappa() - 2000.0 / (3.0 * (1.0 - 2.0 * 0.38))).abs() < 1e-9);
+    }
+
+    /// τ(I) = 0 and τ(R) = 0 for random rotations, both models.
+    #[test]
+    fn stress_free_at_rest_and_under_rotation() {
+        let mut r = SplitMix64::new(21);
+        let l = lame();
+        for m in MODELS {
+            assert!(max_abs(kirchhoff(m, DMat3::IDENTITY, &l)) < 1e-12);
+            for _ in 0..1000 {
+                let tau = kirchhoff(m, random_rotation(&mut r), &l);
+                assert!(max_abs(tau) < 1e-9 * l.kappa(), "{m:?}: {tau}");
+            }
+        }
+    }
+
+    /// τ is symmetric and objective: τ(QF) = Q τ(F) Qᵀ.
+    #[test]
+    fn stress_symmetric_and_objective() {
+        let mut r = SplitMix64::new(22);
+        let l = lame();
+        for m in MODELS {
+            for _ in 0..2000 {
+                let f = DMat3::IDENTITY + random_matrix(&mut r, 0.4);
+                let tau = kirchhoff(m, f, &l);
+                let scale = max_abs(tau).max(1.0);
+                assert!(max_abs(tau - tau.transpose()) < 1e-12 * scale);
+                let q = random_rotation(&mut r);
+                let rotated = kirchhoff(m, q * f, &l);
+                assert!(max_abs(rotated - q * tau * q.transpose()) < 1e-11 * scale);
+            }
+        }
+    }
+
+    /// Small strain: dτ/dF at I along H equals λ tr(ε) I + 2μ ε with ε = sym(H) (central
+    /// finite differences, step 1e-5; any skew part of H must not contribute).
+    #[test]
+    fn small_strain_limit_is_linear_elasticity() {
+        let mut r = SplitMix64::new(23);
+        let l = lame();
+        let h = 1e-5;
+        let mut worst = 0.0f64;
+        for m in MODELS {
+            for _ in 0..500 {
+                let dir = random_matrix(&mut r, 1.0);
+                let eps = (dir + dir.transpose()) * 0.5;
+                let tr = eps.x_axis.x + eps.y_axis.y + eps.z_axis.z;
+                let linear = DMat3::IDENTITY * (l.lambda * tr) + eps * (2.0 * l.mu);
+                let plus = kirchhoff(m, DMat3::IDENTITY + dir * h, &l);
+                let minus = kirchhoff(m, DMat3::IDENTITY - dir * h, &l);
+                let fd = (plus - minus) * (0.5 / h);
+                let rel = max_abs(fd - linear) / max_abs(linear);
+                worst = worst.max(rel);
+                assert!(rel < 1e-6, "{m:?}: {fd} vs {linear}");
+            }
+        }
+        println!("small-strain limit: worst relative deviation {worst:e}");
+    }
+
+    /// Neo-Hookean under pure dilation F = J^(1/3) I: τ = κ/2 (J² − 1) I exactly, i.e.
+    /// pressure p = −tr(τ)/3 = κ/2 (1 − J²) (SPEC §4's p).
+    #[test]
+    fn neo_hookean_dilation_pressure() {
+        let l = lame();
+        for j in [0.3, 0.8, 0.99, 1.0, 1.01, 1.5, 3.0] {
+            let tau = kirchhoff_neo_hookean(DMat3::IDENTITY * f64::cbrt(j), &l);
+            let want = 0.5 * l.kappa() * (j * j - 1.0);
+            let err = max_abs(tau - DMat3::IDENTITY * want);
+            assert!(err < 1e-12 * l.kappa(), "J = {j}: {tau} vs {want}");
+        }
+    }
+
+    /// τ = (∂ψ/∂F) Fᵀ with ∂ψ/∂F by central finite differences of the energy.
+    #[test]
+    fn stress_is_energy_derivative() {
+        let mut r = SplitMix64::new(24);
+        let l = lame();
+        let h = 1e-6;
+        for m in MODELS {
+            for _ in 0..300 {
+                let f = DMat3::IDENTITY + random_matrix(&mut r, 0.3);
+                let mut p = DMat3::ZERO;
+                for k in 0..9 {
+                    let mut e = [0.0; 9];
+                    e[k] = h;
+                    let d = DMat3::from_cols_array(&e);
+                    let dpsi = energy_density(m, f + d, &l) - energy_density(m, f - d, &l);
+                    let mut cols = p.to_cols_array();
+                    cols[k] = dpsi / (2.0 * h);
+                    p = DMat3::from_cols_array(&cols);
+                }
+                let tau = kirchhoff(m, f, &l);
+                let err = max_abs(p * f.transpose() - tau) / max_abs(tau).max(1.0);
+                assert!(err < 1e-6, "{m:?}: {} vs {tau}", p * f.transpose());
+            }
+        }
+    }
+}
