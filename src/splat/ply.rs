@@ -24,7 +24,7 @@
 //! a message, not an allocation.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{Quat, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
@@ -152,28 +152,22 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
     Ok((cloud, report))
 }
 
-/// Write `cloud` as a standard 3DGS PLY file (via `<path>.tmp` and a rename).
+/// Write `cloud` as a standard 3DGS PLY file, atomically (a hidden temporary file, then a
+/// rename: see [`crate::output::write_atomically`]).
 pub fn write_ply(path: &Path, cloud: &GaussianCloud, format: PlyFormat) -> Result<(), PlyError> {
     let name = path.display().to_string();
     let bytes = write_ply_bytes(cloud, format, &name)?;
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    if let Err(source) = std::fs::write(&tmp, &bytes) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(PlyError::Io {
-            file: tmp.display().to_string(),
+    crate::output::write_atomically(path, &bytes).map_err(|e| match e {
+        crate::output::OutputError::Write { source, .. } => PlyError::Io {
+            file: name,
             action: "write the PLY file",
             source,
-        });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        PlyError::Io {
+        },
+        other => PlyError::Io {
             file: name,
-            action: "rename the temporary PLY file into place",
-            source,
-        }
+            action: "write the PLY file",
+            source: std::io::Error::other(other.to_string()),
+        },
     })
 }
 
