@@ -10,4 +10,5 @@ pub mod output;
 pub mod render;
 pub mod rng;
 pub mod scene;
+pub mod sim;
 pub mod splat;

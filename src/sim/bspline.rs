@@ -144,7 +144,9 @@ mod tests {
                 let v = s.offset(o, dx);
                 d += DMat3::from_cols(v * v.x, v * v.y, v * v.z) * s.weight(o);
             }
-            let err = (d - DMat3::IDENTITY * (0.25 * dx * dx)).abs().to_cols_array();
+            let err = (d - DMat3::IDENTITY * (0.25 * dx * dx))
+                .abs()
+                .to_cols_array();
             assert!(err.iter().all(|e| *e < 1e-16), "{d}");
         }
     }

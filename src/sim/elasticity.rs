@@ -44,10 +44,14 @@ pub enum ElasticModel {
     NeoHookean,
 }
 
+/// Trace of a 3×3 matrix.
+pub fn trace(a: DMat3) -> f64 {
+    a.x_axis.x + a.y_axis.y + a.z_axis.z
+}
+
 /// Deviatoric part `A − tr(A)/3 I`.
 pub fn dev(a: DMat3) -> DMat3 {
-    let tr = a.x_axis.x + a.y_axis.y + a.z_axis.z;
-    a - DMat3::IDENTITY * (tr / 3.0)
+    a - DMat3::IDENTITY * (trace(a) / 3.0)
 }
 
 /// Fixed-corotated Kirchhoff stress (SPEC §3): τ = 2μ (F − R) Fᵀ + λ (J − 1) J I, with R
@@ -63,8 +67,7 @@ pub fn kirchhoff_fixed_corotated(f: DMat3, lame: &Lame) -> DMat3 {
 pub fn kirchhoff_neo_hookean(f: DMat3, lame: &Lame) -> DMat3 {
     let j = f.determinant();
     let b = f * f.transpose();
-    dev(b) * (lame.mu * j.powf(-2.0 / 3.0))
-        + DMat3::IDENTITY * (0.5 * lame.kappa() * (j * j - 1.0))
+    dev(b) * (lame.mu * j.powf(-2.0 / 3.0)) + DMat3::IDENTITY * (0.5 * lame.kappa() * (j * j - 1.0))
 }
 
 /// Kirchhoff stress of `model`.
@@ -86,7 +89,7 @@ pub fn energy_density(model: ElasticModel, f: DMat3, lame: &Lame) -> f64 {
             lame.mu * d.length_squared() + 0.5 * lame.lambda * (j - 1.0) * (j - 1.0)
         }
         ElasticModel::NeoHookean => {
-            let tr_b = (f * f.transpose()).to_cols_array()[..].iter().step_by(4).sum::<f64>();
+            let tr_b = trace(f * f.transpose());
             0.5 * lame.mu * (j.powf(-2.0 / 3.0) * tr_b - 3.0)
                 + 0.5 * lame.kappa() * (0.5 * (j * j - 1.0) - j.ln())
         }
@@ -170,8 +173,7 @@ mod tests {
             for _ in 0..500 {
                 let dir = random_matrix(&mut r, 1.0);
                 let eps = (dir + dir.transpose()) * 0.5;
-                let tr = eps.x_axis.x + eps.y_axis.y + eps.z_axis.z;
-                let linear = DMat3::IDENTITY * (l.lambda * tr) + eps * (2.0 * l.mu);
+                let linear = DMat3::IDENTITY * (l.lambda * trace(eps)) + eps * (2.0 * l.mu);
                 let plus = kirchhoff(m, DMat3::IDENTITY + dir * h, &l);
                 let minus = kirchhoff(m, DMat3::IDENTITY - dir * h, &l);
                 let fd = (plus - minus) * (0.5 / h);

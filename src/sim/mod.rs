@@ -1,0 +1,32 @@
+//! The CPU side of the MPM physics (SPEC §2–§4, §6) as pure f64 functions: the oracle the
+//! f32 WGSL kernels are tested against (the GPU runs the same formulas in f32; compare with
+//! tolerances scaled to f32, not bit for bit).
+//!
+//! Where each SPEC formula lives:
+//!
+//! | SPEC | formula | here |
+//! |---|---|---|
+//! | §2 | quadratic B-spline weights w0/w1/w2, base, fx, d_ip, ∇w | [`bspline`] |
+//! | §2 | MLS factor 4/Δx² = D_p⁻¹ (Σ w d dᵀ = Δx²/4 I) | [`bspline`] (tested) |
+//! | §4, §6 | 3×3 SVD F = U Σ Vᵀ, det U = det V = +1, sign in σ₃ | [`svd::svd3`] |
+//! | §3, §6 | polar decomposition F = R S (R for fixed corotated and the SH frame) | [`svd::polar`] |
+//! | §3 | Lamé μ, λ from (E, ν); bulk κ | [`elasticity::Lame`] |
+//! | §3 | fixed-corotated τ = 2μ (F − R) Fᵀ + λ (J − 1) J I | [`elasticity::kirchhoff_fixed_corotated`] |
+//! | §3 | Neo-Hookean (Borden) τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I | [`elasticity::kirchhoff_neo_hookean`] |
+//! | §4 | J, b̄, p, s, q of principal stretches | [`nacc::principal_state`] |
+//! | §4 | p0(α) = κ (ε₀ + sinh(ξ max(−α, 0))), clamped sinh | [`nacc::NaccParams::p0`] |
+//! | §4 | M from a friction angle | [`nacc::m_from_friction_angle`] |
+//! | §4 | y(p, q) = (1 + 2β) q² + M² (p + βp0)(p − p0) | [`nacc::YieldEllipse::y`] |
+//! | §4 | return-mapping table: elastic, tips, case 3 | [`nacc::project_pq`] |
+//! | §4 | case 3: `center`, `continuous{k}`, `closest_point` | [`nacc::Case3Variant`] |
+//! | §4 | back to F (J_E(p), scaled s, det b̄ = 1 solve) and hardening | [`nacc::return_map`] |
+
+pub mod bspline;
+pub mod elasticity;
+pub mod nacc;
+pub mod svd;
+
+pub use bspline::Stencil;
+pub use elasticity::{ElasticModel, Lame};
+pub use nacc::{return_map, Case3Variant, NaccParams, PlasticReturn, ReturnCase, YieldEllipse};
+pub use svd::{polar, svd3, Svd3};
