@@ -22,6 +22,7 @@
 //! | §4 | back to F (J_E(p), scaled s, det b̄ = 1 solve) and hardening | [`nacc::return_map`] |
 
 pub mod bspline;
+pub mod cpu;
 pub mod elasticity;
 pub mod nacc;
 pub mod svd;
