@@ -24,8 +24,10 @@
 pub mod bspline;
 pub mod cpu;
 pub mod elasticity;
+pub mod gpu;
 pub mod nacc;
 pub mod svd;
+pub mod wgsl;
 
 pub use bspline::Stencil;
 pub use elasticity::{ElasticModel, Lame};

@@ -12,7 +12,7 @@
 //! back at the end. Buffers are kept between frames and grown only when needed.
 
 pub mod layout;
-mod passes;
+pub(crate) mod passes;
 pub mod radix_sort;
 pub mod scan;
 

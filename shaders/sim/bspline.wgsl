@@ -1,0 +1,70 @@
+// Quadratic B-spline weights of MPM (SPEC §2) in f32: the WGSL twin of src/sim/bspline.rs.
+//
+// For a particle at x and grid spacing Δx (passed as inv_dx = 1/Δx and dx):
+// base = floor(x/Δx − 0.5), fx = x/Δx − base (each component in [0.5, 1.5), up to one ulp
+// of rounding at the ends), and per axis
+//   w0 = ½ (1.5 − f)²    dw0/df = f − 1.5
+//   w1 = ¾ − (f − 1)²    dw1/df = −2 (f − 1)
+//   w2 = ½ (f − 0.5)²    dw2/df = f − 0.5
+// Node base + off, off ∈ {0,1,2}³, gets w = w[off.x].x · w[off.y].y · w[off.z].z;
+// d_ip = i·Δx − x_p = (off − fx)·Δx (from fx, so it does not depend on the size of x);
+// ∇w = (dw_a w_b w_c, w_a dw_b w_c, w_a w_b dw_c) / Δx. The MLS factor 4/Δx² of SPEC §2 is
+// D_p⁻¹ (Σ w d dᵀ = Δx²/4 I).
+//
+// f32 note: x/Δx carries an absolute error of ~ε·|x|/Δx, so fx and the weights do too
+// (~2e-5 at 300 cells from the origin); keep the domain's origin near the particles.
+
+struct BsplineStencil {
+    // lowest node of the 3×3×3 stencil, floor(x/Δx − 0.5)
+    base: vec3<i32>,
+    // x/Δx − base
+    fx: vec3<f32>,
+    // w[a]: weight of offset a ∈ {0,1,2} on each axis (x, y, z components)
+    w: array<vec3<f32>, 3>,
+    // dw[a]: derivative of w[a] with respect to fx (times inv_dx: with respect to x)
+    dw: array<vec3<f32>, 3>,
+}
+
+// The stencil of a particle at x on a grid with node i at i·Δx, inv_dx = 1/Δx.
+fn bspline_stencil(x: vec3<f32>, inv_dx: f32) -> BsplineStencil {
+    let xs = x * inv_dx;
+    let base_f = floor(xs - 0.5);
+    let fx = xs - base_f;
+    var s: BsplineStencil;
+    s.base = vec3<i32>(base_f);
+    s.fx = fx;
+    let d0 = 1.5 - fx;
+    let d1 = fx - 1.0;
+    let d2 = fx - 0.5;
+    s.w[0] = 0.5 * d0 * d0;
+    s.w[1] = 0.75 - d1 * d1;
+    s.w[2] = 0.5 * d2 * d2;
+    s.dw[0] = -d0;
+    s.dw[1] = -2.0 * d1;
+    s.dw[2] = d2;
+    return s;
+}
+
+// Weight w_ip of node base + off, off ∈ {0,1,2}³.
+fn bspline_weight(s: BsplineStencil, off: vec3<u32>) -> f32 {
+    return s.w[off.x].x * s.w[off.y].y * s.w[off.z].z;
+}
+
+// Gradient ∇_x w_ip of node base + off with respect to the particle position.
+fn bspline_weight_grad(s: BsplineStencil, off: vec3<u32>, inv_dx: f32) -> vec3<f32> {
+    let wa = s.w[off.x].x;
+    let wb = s.w[off.y].y;
+    let wc = s.w[off.z].z;
+    return vec3<f32>(s.dw[off.x].x * wb * wc, wa * s.dw[off.y].y * wc, wa * wb * s.dw[off.z].z) * inv_dx;
+}
+
+// Offset d_ip = i·Δx − x_p of node base + off from the particle.
+fn bspline_offset(s: BsplineStencil, off: vec3<u32>, dx: f32) -> vec3<f32> {
+    return (vec3<f32>(off) - s.fx) * dx;
+}
+
+// Offset (a, b, c) ∈ {0,1,2}³ of stencil node n ∈ [0, 27), x fastest (as
+// `bspline::stencil_offsets`).
+fn bspline_stencil_offset(n: u32) -> vec3<u32> {
+    return vec3<u32>(n % 3u, (n / 3u) % 3u, n / 9u);
+}

@@ -1,0 +1,96 @@
+// Shared declarations of the MPM step passes (SPEC §2). Mirrored by `#[repr(C)]` types in
+// src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). Concatenated after
+// shaders/sim/{math,bspline,svd,elasticity,nacc}.wgsl.
+
+const MAX_MATERIALS: u32 = 16u;
+const MAX_COLLIDERS: u32 = 8u;
+
+const MATERIAL_FIXED_COROTATED: u32 = 0u;
+const MATERIAL_NEO_HOOKEAN: u32 = 1u;
+const MATERIAL_NACC: u32 = 2u;
+
+const BOUNDARY_STICKY: u32 = 0u;
+const BOUNDARY_SLIP: u32 = 1u;
+const BOUNDARY_SEPARATE: u32 = 2u;
+
+struct SimMaterial {
+    // MATERIAL_*
+    kind: u32,
+    mu: f32,
+    lambda: f32,
+    kappa: f32,
+    nacc: NaccMaterial,
+}
+
+// A boundary condition on a domain face or a collider.
+struct Condition {
+    // BOUNDARY_*
+    kind: u32,
+    // Coulomb friction μ on the tangential velocity
+    friction: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// A planar collider: the solid half-space (x − point)·normal ≤ 0, normal unit and outward.
+struct Collider {
+    point: vec4<f32>,
+    normal: vec4<f32>,
+    condition: Condition,
+}
+
+struct SimStep {
+    // node i sits at lo + i·dx
+    lo: vec3<f32>,
+    dx: f32,
+    gravity: vec3<f32>,
+    dt: f32,
+    // cells per axis (nodes = cells + 1)
+    cells: vec3<u32>,
+    num_particles: u32,
+    // nodes per axis
+    nodes: vec3<u32>,
+    num_colliders: u32,
+    // wall band width in nodes, and whether the transfer is APIC (1) or PIC (0)
+    band: u32,
+    apic: u32,
+    _pad0: u32,
+    _pad1: u32,
+    // domain faces −x, +x, −y, +y, −z, +z
+    walls: array<Condition, 6>,
+    colliders: array<Collider, MAX_COLLIDERS>,
+    materials: array<SimMaterial, MAX_MATERIALS>,
+}
+
+// Key of a particle whose stencil is off the grid: one past the last base cell, so those
+// particles sort last and fall into the extra slot of the cell ranges.
+fn no_cell_key(step: SimStep) -> u32 {
+    let bc = step.cells - 1u;
+    return bc.x * bc.y * bc.z;
+}
+
+// The stencil of x when its 3×3×3 nodes all lie on the grid (mirrors `cpu::Grid::stencil`).
+struct GridStencil {
+    ok: bool,
+    s: BsplineStencil,
+}
+
+fn grid_stencil(step: SimStep, x: vec3<f32>) -> GridStencil {
+    var out: GridStencil;
+    out.ok = false;
+    if !sim_is_finite3(x) {
+        return out;
+    }
+    let rel = (x - step.lo) / step.dx;
+    let top = vec3<f32>(step.cells) - 0.5;
+    if any(rel < vec3<f32>(0.5)) || any(rel >= top) {
+        return out;
+    }
+    out.s = bspline_stencil(x - step.lo, 1.0 / step.dx);
+    out.ok = all(out.s.base >= vec3<i32>(0)) && all(out.s.base + 2 <= vec3<i32>(step.cells));
+    return out;
+}
+
+fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
+    return (wid.x + wid.y * nwg.x) * 256u + lid;
+}

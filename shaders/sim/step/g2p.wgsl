@@ -1,0 +1,57 @@
+// G2P (per particle, SPEC §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
+// F ← (I + Δt C) F, x += Δt v_p, then the material's plasticity (NACC return mapping,
+// SPEC §4). A particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
+
+@group(0) @binding(0) var<uniform> step: SimStep;
+@group(0) @binding(1) var<storage, read_write> x_mass: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> v_volume: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> deformation: array<mat3x3<f32>>;
+@group(0) @binding(4) var<storage, read_write> affine_velocity: array<mat3x3<f32>>;
+@group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
+@group(0) @binding(6) var<storage, read> material: array<u32>;
+@group(0) @binding(7) var<storage, read> grid: array<vec4<f32>>;
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let p = flat_id(wid, nwg, lid);
+    if p >= step.num_particles {
+        return;
+    }
+    let xm = x_mass[p];
+    let vv = v_volume[p];
+    let st = grid_stencil(step, xm.xyz);
+    if !st.ok {
+        let v = vv.xyz + step.gravity * step.dt;
+        v_volume[p] = vec4<f32>(v, vv.w);
+        x_mass[p] = vec4<f32>(xm.xyz + v * step.dt, xm.w);
+        return;
+    }
+    let s = st.s;
+    let n = step.nodes;
+    let base = vec3<u32>(s.base);
+    var vp = vec3<f32>(0.0);
+    var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+    for (var k = 0u; k < 27u; k++) {
+        let off = bspline_stencil_offset(k);
+        let i = base + off;
+        let vi = grid[i.x + n.x * (i.y + n.y * i.z)].xyz;
+        let w = bspline_weight(s, off);
+        let d = bspline_offset(s, off, step.dx);
+        vp += w * vi;
+        b += mat3x3<f32>(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
+    }
+    let c = b * (4.0 / (step.dx * step.dx));
+    let f_trial = (SIM_IDENTITY3 + c * step.dt) * deformation[p];
+    v_volume[p] = vec4<f32>(vp, vv.w);
+    affine_velocity[p] = c;
+    x_mass[p] = vec4<f32>(xm.xyz + vp * step.dt, xm.w);
+    let m = step.materials[material[p]];
+    if m.kind == MATERIAL_NACC {
+        let r = nacc_return_map(f_trial, alpha[p], m.nacc);
+        deformation[p] = r.f;
+        alpha[p] = r.alpha;
+    } else {
+        deformation[p] = f_trial;
+    }
+}

@@ -1,0 +1,58 @@
+// P2G, part 2, and the grid update (per grid node): gather m_i = Σ w_ip m_p and
+// p_i = Σ w_ip (m_p v_p + affine_p d_ip) over the particles of the 27 base cells whose
+// stencils reach node i (SPEC §2 step 1), then the node's velocity (grid_update.wgsl,
+// SPEC §2 step 2). Particles are sorted by base cell, so no atomics are needed: the sum has
+// a fixed order and the result is the same on every run and every backend. Mirrors
+// `cpu::p2g` followed by `cpu::grid_update`.
+
+@group(0) @binding(0) var<uniform> step: SimStep;
+@group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
+@group(0) @binding(2) var<storage, read> cell_values: array<u32>;
+@group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
+// xyz: velocity after the grid update, w: mass
+@group(0) @binding(6) var<storage, read_write> grid: array<vec4<f32>>;
+// 1 where some particle's stencil may reach the node (mark_nodes.wgsl)
+@group(0) @binding(7) var<storage, read> node_active: array<u32>;
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let idx = flat_id(wid, nwg, lid);
+    let n = step.nodes;
+    if idx >= n.x * n.y * n.z {
+        return;
+    }
+    // Inactive nodes are left as they are: no particle reads them.
+    if node_active[idx] == 0u {
+        return;
+    }
+    let node = vec3<i32>(vec3<u32>(idx % n.x, (idx / n.x) % n.y, idx / (n.x * n.y)));
+    let bc = vec3<i32>(step.cells) - 1;
+    var msum = 0.0;
+    var psum = vec3<f32>(0.0);
+    for (var oz = 0; oz < 3; oz++) {
+        for (var oy = 0; oy < 3; oy++) {
+            for (var ox = 0; ox < 3; ox++) {
+                let b = node - vec3<i32>(ox, oy, oz);
+                if any(b < vec3<i32>(0)) || any(b >= bc) {
+                    continue;
+                }
+                let cell = u32(b.x + bc.x * (b.y + bc.y * b.z));
+                let range = ranges[cell];
+                let off = vec3<u32>(u32(ox), u32(oy), u32(oz));
+                for (var k = range.x; k < range.y; k++) {
+                    let p = cell_values[k];
+                    let xm = x_mass[p];
+                    let s = bspline_stencil(xm.xyz - step.lo, 1.0 / step.dx);
+                    let w = bspline_weight(s, off);
+                    let d = bspline_offset(s, off, step.dx);
+                    msum += w * xm.w;
+                    psum += w * (xm.w * v_volume[p].xyz + affine[p] * d);
+                }
+            }
+        }
+    }
+    grid[idx] = vec4<f32>(node_velocity(step, vec3<u32>(node), psum, msum), msum);
+}

@@ -1,0 +1,48 @@
+// P2G, part 1 (per particle): the particle's base cell as a sort key, and its affine
+// momentum term affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (SPEC §2 step 1), computed once
+// here rather than 27 times in the gather. Mirrors the item building in `cpu::p2g`.
+
+@group(0) @binding(0) var<uniform> step: SimStep;
+@group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> deformation: array<mat3x3<f32>>;
+@group(0) @binding(4) var<storage, read> affine_velocity: array<mat3x3<f32>>;
+@group(0) @binding(5) var<storage, read> material: array<u32>;
+@group(0) @binding(6) var<storage, read_write> cell_keys: array<u32>;
+@group(0) @binding(7) var<storage, read_write> cell_values: array<u32>;
+@group(0) @binding(8) var<storage, read_write> affine: array<mat3x3<f32>>;
+
+fn kirchhoff(m: SimMaterial, f: mat3x3<f32>) -> mat3x3<f32> {
+    if m.kind == MATERIAL_FIXED_COROTATED {
+        return elastic_kirchhoff_fixed_corotated(f, m.mu, m.lambda);
+    }
+    // Neo-Hookean (Borden) is also the elasticity under NACC (SPEC §3).
+    return elastic_kirchhoff_neo_hookean(f, m.mu, m.kappa);
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let p = flat_id(wid, nwg, lid);
+    if p >= step.num_particles {
+        return;
+    }
+    cell_values[p] = p;
+    let xm = x_mass[p];
+    let st = grid_stencil(step, xm.xyz);
+    if !st.ok {
+        cell_keys[p] = no_cell_key(step);
+        return;
+    }
+    let bc = step.cells - 1u;
+    let b = vec3<u32>(st.s.base);
+    cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
+    let mass = xm.w;
+    let inv_d = 4.0 / (step.dx * step.dx);
+    let tau = kirchhoff(step.materials[material[p]], deformation[p]);
+    var a = tau * (-step.dt * v_volume[p].w * inv_d);
+    if step.apic == 1u {
+        a += affine_velocity[p] * mass;
+    }
+    affine[p] = a;
+}

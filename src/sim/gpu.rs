@@ -1,0 +1,611 @@
+//! The explicit MPM step on the GPU (SPEC §2), mirroring [`super::cpu`] pass for pass:
+//!
+//! 1. `shaders/sim/step/prepare.wgsl` — per particle: base-cell sort key and the affine
+//!    term m C − Δt V⁰ (4/Δx²) τ(F);
+//! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
+//! 3. `shaders/render/tile_ranges.wgsl` — each cell's run of particles (the renderer's
+//!    tile-range pass: the same job on other keys);
+//! 4. `shaders/sim/step/mark_nodes.wgsl` — nodes that an occupied cell's stencils reach;
+//! 5. `shaders/sim/step/p2g.wgsl` — per active node: gather mass and momentum from the 27
+//!    cells whose stencils reach it (no atomics: deterministic, and runs on GL too), then
+//!    the grid update in the same thread (`grid_update.wgsl`: velocity, gravity, colliders,
+//!    walls);
+//! 6. `shaders/sim/step/g2p.wgsl` — velocities, C, F, positions, NACC plasticity.
+//!
+//! Every substep of a call to [`GpuSim::step`] goes into one command buffer with nothing
+//! read back in between. The per-particle math is `shaders/sim/*.wgsl`, tested against the
+//! f64 oracle in `tests/sim_wgsl.rs`; the whole step is tested against [`super::cpu`] in
+//! `tests/sim_gpu.rs`.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat3, DVec3, Mat3};
+use wgpu::util::DeviceExt;
+
+use super::cpu::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
+use super::wgsl::{self, NaccMaterialGpu};
+use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::render::gpu::passes::TileRanges;
+use crate::render::gpu::radix_sort::{RadixSort, SortBuffers, SortPlan};
+use crate::render::gpu::read_buffer;
+use crate::render::gpu::scan::Scan;
+
+pub const MAX_MATERIALS: usize = 16;
+pub const MAX_COLLIDERS: usize = 8;
+
+/// `SimMaterial` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub kind: u32,
+    pub mu: f32,
+    pub lambda: f32,
+    pub kappa: f32,
+    pub nacc: NaccMaterialGpu,
+}
+
+/// `Condition` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuCondition {
+    pub kind: u32,
+    pub friction: f32,
+    pub _pad: [u32; 2],
+}
+
+/// `Collider` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuCollider {
+    pub point: [f32; 4],
+    pub normal: [f32; 4],
+    pub condition: GpuCondition,
+}
+
+/// `SimStep` of `shaders/sim/step/common.wgsl`: everything constant over a step.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuStep {
+    pub lo: [f32; 3],
+    pub dx: f32,
+    pub gravity: [f32; 3],
+    pub dt: f32,
+    pub cells: [u32; 3],
+    pub num_particles: u32,
+    pub nodes: [u32; 3],
+    pub num_colliders: u32,
+    pub band: u32,
+    pub apic: u32,
+    pub _pad: [u32; 2],
+    pub walls: [GpuCondition; 6],
+    pub colliders: [GpuCollider; MAX_COLLIDERS],
+    pub materials: [GpuMaterial; MAX_MATERIALS],
+}
+
+impl GpuCondition {
+    fn from_cpu(c: &Condition) -> Self {
+        let kind = match c.kind {
+            BoundaryKind::Sticky => 0,
+            BoundaryKind::Slip => 1,
+            BoundaryKind::Separate => 2,
+        };
+        GpuCondition {
+            kind,
+            friction: c.friction as f32,
+            _pad: [0; 2],
+        }
+    }
+}
+
+impl GpuMaterial {
+    fn from_cpu(m: &Material) -> Self {
+        let lame = m.lame();
+        let kappa = lame.lambda + 2.0 * lame.mu / 3.0;
+        let (kind, nacc) = match m {
+            Material::FixedCorotated { .. } => (0, NaccMaterialGpu::default()),
+            Material::NeoHookean { .. } => (1, NaccMaterialGpu::default()),
+            Material::Nacc { params, variant } => (2, NaccMaterialGpu::new(params, *variant)),
+        };
+        GpuMaterial {
+            kind,
+            mu: lame.mu as f32,
+            lambda: lame.lambda as f32,
+            kappa: kappa as f32,
+            nacc,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimSetupError {
+    #[error("{0} materials given; the GPU step supports at most {MAX_MATERIALS}")]
+    TooManyMaterials(usize),
+    #[error("{0} colliders given; the GPU step supports at most {MAX_COLLIDERS}")]
+    TooManyColliders(usize),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+impl GpuStep {
+    pub fn new(
+        grid: &Grid,
+        materials: &[Material],
+        params: &StepParams,
+        num_particles: u32,
+    ) -> Result<GpuStep, SimSetupError> {
+        if materials.len() > MAX_MATERIALS {
+            return Err(SimSetupError::TooManyMaterials(materials.len()));
+        }
+        let colliders = &params.boundaries.colliders;
+        if colliders.len() > MAX_COLLIDERS {
+            return Err(SimSetupError::TooManyColliders(colliders.len()));
+        }
+        let mut step = GpuStep {
+            lo: grid.lo.as_vec3().to_array(),
+            dx: grid.dx as f32,
+            gravity: params.gravity.as_vec3().to_array(),
+            dt: params.dt as f32,
+            cells: grid.cells.to_array(),
+            num_particles,
+            nodes: grid.nodes().to_array(),
+            num_colliders: colliders.len() as u32,
+            band: params.boundaries.walls.band,
+            apic: u32::from(params.transfer == Transfer::Apic),
+            _pad: [0; 2],
+            walls: params
+                .boundaries
+                .walls
+                .faces
+                .map(|c| GpuCondition::from_cpu(&c)),
+            colliders: [GpuCollider::default(); MAX_COLLIDERS],
+            materials: [GpuMaterial::default(); MAX_MATERIALS],
+        };
+        for (slot, c) in step.colliders.iter_mut().zip(colliders) {
+            let n = c.normal.normalize();
+            *slot = GpuCollider {
+                point: [c.point.x as f32, c.point.y as f32, c.point.z as f32, 0.0],
+                normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
+                condition: GpuCondition::from_cpu(&c.condition),
+            };
+        }
+        for (slot, m) in step.materials.iter_mut().zip(materials) {
+            *slot = GpuMaterial::from_cpu(m);
+        }
+        Ok(step)
+    }
+}
+
+/// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
+/// declarations, then the pass.
+fn source(pass: &str) -> String {
+    [
+        wgsl::library().as_str(),
+        include_str!("../../shaders/sim/step/common.wgsl"),
+        include_str!("../../shaders/sim/step/grid_update.wgsl"),
+        pass,
+    ]
+    .join("\n")
+}
+
+struct Kernels {
+    prepare: Kernel,
+    mark_nodes: Kernel,
+    p2g: Kernel,
+    g2p: Kernel,
+    ranges: TileRanges,
+    sort: RadixSort,
+    scan: Scan,
+}
+
+struct Buffers {
+    step: wgpu::Buffer,
+    x_mass: wgpu::Buffer,
+    v_volume: wgpu::Buffer,
+    deformation: wgpu::Buffer,
+    affine_velocity: wgpu::Buffer,
+    alpha: wgpu::Buffer,
+    material: wgpu::Buffer,
+    keys: wgpu::Buffer,
+    values: wgpu::Buffer,
+    keys_alt: wgpu::Buffer,
+    values_alt: wgpu::Buffer,
+    key_count: wgpu::Buffer,
+    affine: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    grid: wgpu::Buffer,
+    node_active: wgpu::Buffer,
+}
+
+struct Binds {
+    prepare: wgpu::BindGroup,
+    mark_nodes: wgpu::BindGroup,
+    sort: SortPlan,
+    ranges: wgpu::BindGroup,
+    p2g: wgpu::BindGroup,
+    g2p: wgpu::BindGroup,
+}
+
+/// A simulation living on the GPU: particle state, grid, and the passes of one step.
+pub struct GpuSim {
+    kernels: Kernels,
+    buffers: Buffers,
+    binds: Binds,
+    num_particles: u32,
+    num_nodes: u32,
+}
+
+fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
+    let m = m.as_mat3();
+    [
+        m.x_axis.extend(0.0).to_array(),
+        m.y_axis.extend(0.0).to_array(),
+        m.z_axis.extend(0.0).to_array(),
+    ]
+}
+
+fn mat3_from_gpu(m: &[[f32; 4]; 3]) -> DMat3 {
+    let c = |v: &[f32; 4]| glam::Vec3::new(v[0], v[1], v[2]);
+    Mat3::from_cols(c(&m[0]), c(&m[1]), c(&m[2])).as_dmat3()
+}
+
+fn init<T: Pod>(gpu: &GpuContext, label: &str, data: &[T], readable: bool) -> wgpu::Buffer {
+    let bytes: &[u8] = bytemuck::cast_slice(data);
+    let mut padded = bytes.to_vec();
+    padded.resize(bytes.len().max(256), 0);
+    let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
+    if readable {
+        usage |= wgpu::BufferUsages::COPY_SRC;
+    }
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: &padded,
+            usage,
+        })
+}
+
+fn zeroed(gpu: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(256),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+impl GpuSim {
+    /// Upload `particles` for stepping on `grid` (its box, spacing and cell count) with
+    /// `materials` and `params` (Δt, gravity, boundaries, transfer).
+    pub fn new(
+        gpu: &GpuContext,
+        particles: &Particles,
+        grid: &Grid,
+        materials: &[Material],
+        params: &StepParams,
+    ) -> Result<GpuSim, SimSetupError> {
+        let n = particles.len() as u32;
+        let step = GpuStep::new(grid, materials, params, n)?;
+        let device = &gpu.device;
+        let kernels = Kernels {
+            prepare: Kernel::new(
+                device,
+                "sim prepare",
+                &source(include_str!("../../shaders/sim/step/prepare.wgsl")),
+                "main",
+            ),
+            mark_nodes: Kernel::new(
+                device,
+                "sim mark_nodes",
+                &source(include_str!("../../shaders/sim/step/mark_nodes.wgsl")),
+                "main",
+            ),
+            p2g: Kernel::new(
+                device,
+                "sim p2g",
+                &source(include_str!("../../shaders/sim/step/p2g.wgsl")),
+                "main",
+            ),
+            g2p: Kernel::new(
+                device,
+                "sim g2p",
+                &source(include_str!("../../shaders/sim/step/g2p.wgsl")),
+                "main",
+            ),
+            ranges: TileRanges::new(device),
+            sort: RadixSort::new(device),
+            scan: Scan::new(device),
+        };
+        let x_mass: Vec<[f32; 4]> = (0..particles.len())
+            .map(|p| {
+                particles.x[p]
+                    .as_vec3()
+                    .extend(particles.mass[p] as f32)
+                    .to_array()
+            })
+            .collect();
+        let v_volume: Vec<[f32; 4]> = (0..particles.len())
+            .map(|p| {
+                particles.v[p]
+                    .as_vec3()
+                    .extend(particles.volume0[p] as f32)
+                    .to_array()
+            })
+            .collect();
+        let f: Vec<[[f32; 4]; 3]> = particles.f.iter().map(|m| mat3_to_gpu(*m)).collect();
+        let c: Vec<[[f32; 4]; 3]> = particles.c.iter().map(|m| mat3_to_gpu(*m)).collect();
+        let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
+        let base_cells = (grid.cells - 1).element_product();
+        let nodes = grid.nodes().element_product();
+        let nn = u64::from(n);
+        let buffers = Buffers {
+            step: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sim step"),
+                contents: bytemuck::bytes_of(&step),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            }),
+            x_mass: init(gpu, "sim x_mass", &x_mass, true),
+            v_volume: init(gpu, "sim v_volume", &v_volume, true),
+            deformation: init(gpu, "sim F", &f, true),
+            affine_velocity: init(gpu, "sim C", &c, true),
+            alpha: init(gpu, "sim alpha", &alpha, true),
+            material: init(gpu, "sim material", &particles.material, false),
+            keys: zeroed(gpu, "sim cell keys", nn * 4),
+            values: zeroed(gpu, "sim cell values", nn * 4),
+            keys_alt: zeroed(gpu, "sim cell keys alt", nn * 4),
+            values_alt: zeroed(gpu, "sim cell values alt", nn * 4),
+            key_count: init(gpu, "sim key count", &[n], false),
+            affine: zeroed(gpu, "sim affine", nn * 48),
+            ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
+            grid: zeroed(gpu, "sim grid", u64::from(nodes) * 16),
+            node_active: zeroed(gpu, "sim active nodes", u64::from(nodes) * 4),
+        };
+        let b = &buffers;
+        let sort = kernels.sort.plan(
+            device,
+            &kernels.scan,
+            &SortBuffers {
+                count: &b.key_count,
+                keys: &b.keys,
+                values: &b.values,
+                keys_alt: &b.keys_alt,
+                values_alt: &b.values_alt,
+            },
+            n.max(1),
+            32 - base_cells.leading_zeros(),
+        );
+        let (sorted_keys, sorted_values) = if sort.result_in_alternates() {
+            (&b.keys_alt, &b.values_alt)
+        } else {
+            (&b.keys, &b.values)
+        };
+        let binds = Binds {
+            prepare: kernels.prepare.bind(
+                device,
+                &[
+                    &b.step,
+                    &b.x_mass,
+                    &b.v_volume,
+                    &b.deformation,
+                    &b.affine_velocity,
+                    &b.material,
+                    &b.keys,
+                    &b.values,
+                    &b.affine,
+                ],
+            ),
+            ranges: kernels
+                .ranges
+                .kernel
+                .bind(device, &[&b.key_count, sorted_keys, &b.ranges]),
+            mark_nodes: kernels
+                .mark_nodes
+                .bind(device, &[&b.step, sorted_keys, &b.node_active]),
+            p2g: kernels.p2g.bind(
+                device,
+                &[
+                    &b.step,
+                    &b.ranges,
+                    sorted_values,
+                    &b.x_mass,
+                    &b.v_volume,
+                    &b.affine,
+                    &b.grid,
+                    &b.node_active,
+                ],
+            ),
+            g2p: kernels.g2p.bind(
+                device,
+                &[
+                    &b.step,
+                    &b.x_mass,
+                    &b.v_volume,
+                    &b.deformation,
+                    &b.affine_velocity,
+                    &b.alpha,
+                    &b.material,
+                    &b.grid,
+                ],
+            ),
+            sort,
+        };
+        Ok(GpuSim {
+            kernels,
+            buffers,
+            binds,
+            num_particles: n,
+            num_nodes: nodes,
+        })
+    }
+
+    /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
+    pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
+        let (k, b, bind) = (&self.kernels, &self.buffers, &self.binds);
+        let particle_groups = self.num_particles.div_ceil(256);
+        let node_groups = self.num_nodes.div_ceil(256);
+        let mut enc = gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("sim steps"),
+            });
+        for _ in 0..steps {
+            enc.clear_buffer(&b.ranges, 0, None);
+            enc.clear_buffer(&b.node_active, 0, None);
+            let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sim step"),
+                timestamp_writes: None,
+            });
+            if self.num_particles > 0 {
+                k.prepare.dispatch(&mut c, &bind.prepare, particle_groups);
+                k.sort.record(&mut c, &k.scan, &bind.sort);
+                k.ranges
+                    .kernel
+                    .dispatch(&mut c, &bind.ranges, particle_groups);
+                k.mark_nodes
+                    .dispatch(&mut c, &bind.mark_nodes, particle_groups);
+            }
+            k.p2g.dispatch(&mut c, &bind.p2g, node_groups);
+            if self.num_particles > 0 {
+                k.g2p.dispatch(&mut c, &bind.g2p, particle_groups);
+            }
+        }
+        gpu.queue.submit([enc.finish()]);
+        gpu.check()
+    }
+
+    /// Bytes of GPU memory this simulation holds (particles, sort, cells, grid).
+    pub fn gpu_bytes(&self) -> u64 {
+        let b = &self.buffers;
+        [
+            &b.x_mass,
+            &b.v_volume,
+            &b.deformation,
+            &b.affine_velocity,
+            &b.alpha,
+            &b.material,
+            &b.keys,
+            &b.values,
+            &b.keys_alt,
+            &b.values_alt,
+            &b.affine,
+            &b.ranges,
+            &b.grid,
+            &b.node_active,
+        ]
+        .iter()
+        .map(|buf| buf.size())
+        .sum()
+    }
+
+    /// Copy the particle state back (positions, velocities, F, C, α; masses, volumes and
+    /// materials as uploaded).
+    pub fn read_particles(
+        &self,
+        gpu: &GpuContext,
+        like: &Particles,
+    ) -> Result<Particles, GpuError> {
+        let n = self.num_particles as usize;
+        let b = &self.buffers;
+        let read = |buf: &wgpu::Buffer, bytes: usize| -> Result<Vec<u8>, GpuError> {
+            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("sim readback"),
+                size: buf.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(buf, 0, &staging, 0, None);
+            gpu.queue.submit([enc.finish()]);
+            let mut data = read_buffer(gpu, &staging)?;
+            data.truncate(bytes);
+            Ok(data)
+        };
+        let x: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(&b.x_mass, n * 16)?);
+        let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(&b.v_volume, n * 16)?);
+        let f: Vec<[[f32; 4]; 3]> = bytemuck::pod_collect_to_vec(&read(&b.deformation, n * 48)?);
+        let c: Vec<[[f32; 4]; 3]> =
+            bytemuck::pod_collect_to_vec(&read(&b.affine_velocity, n * 48)?);
+        let alpha: Vec<f32> = bytemuck::pod_collect_to_vec(&read(&b.alpha, n * 4)?);
+        let mut out = like.clone();
+        let v3 = |a: &[f32; 4]| DVec3::new(f64::from(a[0]), f64::from(a[1]), f64::from(a[2]));
+        out.x = x.iter().map(v3).collect();
+        out.v = v.iter().map(v3).collect();
+        out.f = f.iter().map(mat3_from_gpu).collect();
+        out.c = c.iter().map(mat3_from_gpu).collect();
+        out.alpha = alpha.iter().map(|a| f64::from(*a)).collect();
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::naga;
+
+    fn naga_struct(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
+        let module = naga::front::wgsl::parse_str(source).expect("WGSL parses");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        for (_, ty) in module.types.iter() {
+            if ty.name.as_deref() == Some(name) {
+                if let naga::TypeInner::Struct { members, span } = &ty.inner {
+                    return (
+                        *span,
+                        members
+                            .iter()
+                            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                            .collect(),
+                    );
+                }
+            }
+        }
+        panic!("struct {name} not found in WGSL");
+    }
+
+    macro_rules! check {
+        ($src:expr, $ty:ty, $name:literal, [$($field:ident),*]) => {{
+            let (span, members) = naga_struct($src, $name);
+            assert_eq!(span as usize, std::mem::size_of::<$ty>(), "size of {}", $name);
+            $(
+                let (_, woff) = members
+                    .iter()
+                    .find(|(w, _)| w == stringify!($field))
+                    .unwrap_or_else(|| panic!("{} has no member {}", $name, stringify!($field)));
+                assert_eq!(*woff as usize, std::mem::offset_of!($ty, $field), "{}.{}", $name, stringify!($field));
+            )*
+        }};
+    }
+
+    #[test]
+    fn layouts_match_wgsl() {
+        let src = source("");
+        check!(
+            &src,
+            GpuMaterial,
+            "SimMaterial",
+            [kind, mu, lambda, kappa, nacc]
+        );
+        check!(&src, GpuCondition, "Condition", [kind, friction]);
+        check!(&src, GpuCollider, "Collider", [point, normal, condition]);
+        check!(
+            &src,
+            GpuStep,
+            "SimStep",
+            [
+                lo,
+                dx,
+                gravity,
+                dt,
+                cells,
+                num_particles,
+                nodes,
+                num_colliders,
+                band,
+                apic,
+                walls,
+                colliders,
+                materials
+            ]
+        );
+    }
+}
