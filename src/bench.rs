@@ -144,3 +144,76 @@ pub fn render_bench(
     }
     Ok(())
 }
+
+/// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step with a NACC
+/// material (the paper's fruit parameters), for 20k particles on a 64³ grid and (unless
+/// `quick`) 1M particles on a 128³ grid; plus GPU memory per particle.
+pub fn sim_bench(gpu: &GpuContext, steps: u32, quick: bool, out: &mut dyn Write) -> Result<()> {
+    use crate::sim::cpu::{
+        cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
+    };
+    use crate::sim::gpu::GpuSim;
+    use crate::sim::nacc::{Case3Variant, NaccParams};
+    use glam::DVec3;
+
+    writeln!(out, "adapter: {}", gpu.describe())?;
+    writeln!(
+        out,
+        "{:>10} {:>6} {:>8} {:>12} {:>14} {:>12}",
+        "particles", "grid", "steps", "ms/step", "ns/particle-step", "bytes/particle"
+    )?;
+    let material = Material::Nacc {
+        params: NaccParams {
+            e: 2000.0,
+            nu: 0.4,
+            alpha0: -0.04,
+            beta: 1.0,
+            xi: 2.0,
+            m_slope: 2.36,
+        },
+        variant: Case3Variant::Continuous { k: 2.0 },
+    };
+    let mut cases = vec![(20_000usize, 64u32)];
+    if !quick {
+        cases.push((1_000_000, 128));
+    }
+    for (n, cells) in cases {
+        let dx = 1.0 / f64::from(cells);
+        // A cube of 8 particles per cell in the middle of the domain, falling onto a
+        // sticky ground: contact, plasticity and free flight in one run.
+        let side = (n as f64 / 8.0).cbrt() * dx;
+        let lo = DVec3::new(0.5 - side / 2.0, 0.1, 0.5 - side / 2.0);
+        let mut particles = Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, 2.0);
+        particles.set_material(0, &material);
+        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+        let params = StepParams {
+            dt: cfl_dt(&material, 2.0, dx, 0.4).min(1e-4),
+            gravity: DVec3::new(0.0, -9.8, 0.0),
+            boundaries: Boundaries {
+                walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
+                colliders: vec![],
+            },
+            transfer: Transfer::Apic,
+        };
+        let sim = GpuSim::new(gpu, &particles, &grid, &[material], &params)?;
+        sim.step(gpu, 1)?;
+        gpu.wait()?;
+        let start = Instant::now();
+        sim.step(gpu, steps)?;
+        gpu.wait()?;
+        let secs = start.elapsed().as_secs_f64();
+        let np = particles.len() as f64;
+        writeln!(
+            out,
+            "{:>10} {:>5}³ {:>8} {:>12.2} {:>14.1} {:>12.0}",
+            particles.len(),
+            cells,
+            steps,
+            secs * 1e3 / f64::from(steps),
+            secs * 1e9 / (f64::from(steps) * np),
+            sim.gpu_bytes() as f64 / np
+        )?;
+        out.flush()?;
+    }
+    Ok(())
+}

@@ -47,6 +47,16 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchWhat {
+    /// Nanoseconds per particle-step of the GPU MPM step (NACC): 20k particles on a 64³
+    /// grid and 1M particles on a 128³ grid.
+    Sim {
+        /// Steps timed per case (after one warm-up step).
+        #[arg(long, default_value_t = 20)]
+        steps: u32,
+        /// Only the 20k case.
+        #[arg(long)]
+        quick: bool,
+    },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.
     Render {
         /// Repetitions per case (the median is reported).
@@ -135,6 +145,12 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::DefaultScene) => {
             print!("{}", scene::DEFAULT_SCENE_JSON);
             Ok(())
+        }
+        Some(Command::Bench {
+            what: BenchWhat::Sim { steps, quick },
+        }) => {
+            let gpu = GpuContext::new(cli.backend)?;
+            splatter::bench::sim_bench(&gpu, steps.max(1), quick, &mut std::io::stdout())
         }
         Some(Command::Bench {
             what:
