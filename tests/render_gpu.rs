@@ -4,30 +4,15 @@
 //! or llvmpipe (GL) serves. Set `SPLATTER_TEST_BACKEND=gl` to run them on GL.
 
 use glam::{Mat3, Quat, Vec3};
-use splatter::gpu::{BackendChoice, GpuContext};
+use splatter::gpu::GpuContext;
 use splatter::render::cpu;
 use splatter::render::splats::sym3_from_mat3;
 use splatter::render::{Camera, GpuRenderer, Splats};
 use splatter::rng::SplitMix64;
 use splatter::splat::sh;
 
-/// The best adapter, plus the GL backend when it exists and is not the best one, so that the
-/// portable paths are exercised too (on a CI machine: lavapipe and llvmpipe). The variable
-/// `SPLATTER_TEST_BACKEND=vulkan|gl` restricts the run to one backend.
 fn gpus() -> Vec<GpuContext> {
-    let only = match std::env::var("SPLATTER_TEST_BACKEND").as_deref() {
-        Ok("gl") => Some(BackendChoice::Gl),
-        Ok("vulkan") => Some(BackendChoice::Vulkan),
-        _ => None,
-    };
-    let best = GpuContext::new(only).expect("a wgpu adapter (install mesa-vulkan-drivers)");
-    let mut list = vec![best];
-    if only.is_none() && list[0].info.backend != wgpu::Backend::Gl {
-        if let Ok(gl) = GpuContext::new(Some(BackendChoice::Gl)) {
-            list.push(gl);
-        }
-    }
-    list
+    splatter::gpu::test_contexts()
 }
 
 /// `n` random anisotropic Gaussians in a unit-ish cube, random rotations and SH.

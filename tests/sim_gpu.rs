@@ -4,7 +4,7 @@
 //! within f32 round-off grown over the steps, stated per test in units of Δx.
 
 use glam::{DMat3, DVec3};
-use splatter::gpu::{BackendChoice, GpuContext};
+use splatter::gpu::GpuContext;
 use splatter::sim::cpu::{
     cfl_dt, step, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
@@ -14,16 +14,8 @@ use splatter::sim::nacc::{Case3Variant, NaccParams};
 
 const G: f64 = 9.8;
 
-/// The best adapter, and GL when it is not the best (see tests/render_gpu.rs).
 fn gpus() -> Vec<GpuContext> {
-    let best = GpuContext::new(None).expect("a wgpu adapter (install mesa-vulkan-drivers)");
-    let mut list = vec![best];
-    if list[0].info.backend != wgpu::Backend::Gl {
-        if let Ok(gl) = GpuContext::new(Some(BackendChoice::Gl)) {
-            list.push(gl);
-        }
-    }
-    list
+    splatter::gpu::test_contexts()
 }
 
 struct Scene {

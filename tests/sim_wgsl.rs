@@ -15,7 +15,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use glam::{DMat3, DQuat, DVec3, IVec3};
-use splatter::gpu::{BackendChoice, GpuContext, Kernel};
+use splatter::gpu::{GpuContext, Kernel};
 use splatter::render::gpu::read_buffer;
 use splatter::rng::SplitMix64;
 use splatter::sim::bspline::{stencil_offsets, Stencil};
@@ -36,21 +36,7 @@ const EPS: f64 = f32::EPSILON as f64;
 /// shared by the tests of this file.
 fn gpus() -> &'static [GpuContext] {
     static GPUS: OnceLock<Vec<GpuContext>> = OnceLock::new();
-    GPUS.get_or_init(|| {
-        let only = match std::env::var("SPLATTER_TEST_BACKEND").as_deref() {
-            Ok("gl") => Some(BackendChoice::Gl),
-            Ok("vulkan") => Some(BackendChoice::Vulkan),
-            _ => None,
-        };
-        let best = GpuContext::new(only).expect("a wgpu adapter (install mesa-vulkan-drivers)");
-        let mut list = vec![best];
-        if only.is_none() && list[0].info.backend != wgpu::Backend::Gl {
-            if let Ok(gl) = GpuContext::new(Some(BackendChoice::Gl)) {
-                list.push(gl);
-            }
-        }
-        list
-    })
+    GPUS.get_or_init(splatter::gpu::test_contexts)
 }
 
 fn backend(gpu: &GpuContext) -> String {

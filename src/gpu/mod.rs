@@ -2,6 +2,8 @@
 //! GPU pass uses (kernels with derived layouts, buffers, readback).
 
 mod kernel;
+#[cfg(test)]
+pub(crate) mod layout_check;
 
 pub use kernel::{dispatch_1d, Kernel};
 
@@ -228,6 +230,25 @@ impl GpuContext {
             None => Ok(()),
         }
     }
+}
+
+/// The contexts tests run on: the best adapter, plus the GL backend when it exists and is
+/// not the best one, so that the portable paths are exercised too (on a machine without a
+/// GPU: lavapipe and llvmpipe). `SPLATTER_TEST_BACKEND=vulkan|gl` restricts to one.
+pub fn test_contexts() -> Vec<GpuContext> {
+    let only = match std::env::var("SPLATTER_TEST_BACKEND").as_deref() {
+        Ok("gl") => Some(BackendChoice::Gl),
+        Ok("vulkan") => Some(BackendChoice::Vulkan),
+        _ => None,
+    };
+    let best = GpuContext::new(only).expect("a wgpu adapter (install mesa-vulkan-drivers)");
+    let mut list = vec![best];
+    if only.is_none() && list[0].info.backend != wgpu::Backend::Gl {
+        if let Ok(gl) = GpuContext::new(Some(BackendChoice::Gl)) {
+            list.push(gl);
+        }
+    }
+    list
 }
 
 pub fn describe(info: &wgpu::AdapterInfo) -> String {

@@ -540,54 +540,20 @@ impl GpuSim {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use wgpu::naga;
-
-    fn naga_struct(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
-        let module = naga::front::wgsl::parse_str(source).expect("WGSL parses");
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).expect("layout");
-        for (_, ty) in module.types.iter() {
-            if ty.name.as_deref() == Some(name) {
-                if let naga::TypeInner::Struct { members, span } = &ty.inner {
-                    return (
-                        *span,
-                        members
-                            .iter()
-                            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                            .collect(),
-                    );
-                }
-            }
-        }
-        panic!("struct {name} not found in WGSL");
-    }
-
-    macro_rules! check {
-        ($src:expr, $ty:ty, $name:literal, [$($field:ident),*]) => {{
-            let (span, members) = naga_struct($src, $name);
-            assert_eq!(span as usize, std::mem::size_of::<$ty>(), "size of {}", $name);
-            $(
-                let (_, woff) = members
-                    .iter()
-                    .find(|(w, _)| w == stringify!($field))
-                    .unwrap_or_else(|| panic!("{} has no member {}", $name, stringify!($field)));
-                assert_eq!(*woff as usize, std::mem::offset_of!($ty, $field), "{}.{}", $name, stringify!($field));
-            )*
-        }};
-    }
+    use crate::gpu::layout_check::assert_layout;
 
     #[test]
     fn layouts_match_wgsl() {
         let src = source("");
-        check!(
+        assert_layout!(
             &src,
             GpuMaterial,
             "SimMaterial",
             [kind, mu, lambda, kappa, nacc]
         );
-        check!(&src, GpuCondition, "Condition", [kind, friction]);
-        check!(&src, GpuCollider, "Collider", [point, normal, condition]);
-        check!(
+        assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
+        assert_layout!(&src, GpuCollider, "Collider", [point, normal, condition]);
+        assert_layout!(
             &src,
             GpuStep,
             "SimStep",

@@ -154,51 +154,19 @@ pub fn pack_splats(splats: &Splats) -> (Vec<GaussianIn>, Vec<u32>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use wgpu::naga;
-
-    fn naga_struct(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
-        let module = naga::front::wgsl::parse_str(source).expect("WGSL parses");
-        let mut layouter = naga::proc::Layouter::default();
-        layouter.update(module.to_ctx()).expect("layout");
-        for (handle, ty) in module.types.iter() {
-            if ty.name.as_deref() == Some(name) {
-                if let naga::TypeInner::Struct { members, span } = &ty.inner {
-                    let _ = handle;
-                    return (
-                        *span,
-                        members
-                            .iter()
-                            .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
-                            .collect(),
-                    );
-                }
-            }
-        }
-        panic!("struct {name} not found in WGSL");
-    }
-
-    macro_rules! check {
-        ($src:expr, $ty:ty, $name:literal, [$($field:ident),*]) => {{
-            let (span, members) = naga_struct($src, $name);
-            assert_eq!(span as usize, std::mem::size_of::<$ty>(), "size of {}", $name);
-            let rust = [$((stringify!($field), std::mem::offset_of!($ty, $field))),*];
-            for ((wname, woff), (rname, roff)) in members.iter().zip(rust.iter()) {
-                assert_eq!(*woff as usize, *roff, "{}.{} vs {}", $name, wname, rname);
-            }
-        }};
-    }
+    use crate::gpu::layout_check::assert_layout;
 
     #[test]
     fn layouts_match_wgsl() {
         let common = super::super::shader_source(&[super::super::COMMON]);
-        check!(
+        assert_layout!(
             &common,
             GaussianIn,
             "GaussianIn",
             [mean_opacity, cov_a, cov_b, rotation]
         );
-        check!(&common, Projected, "Projected", [xy_opacity, conic, color]);
-        check!(
+        assert_layout!(&common, Projected, "Projected", [xy_opacity, conic, color]);
+        assert_layout!(
             &common,
             Frame,
             "Frame",
@@ -220,13 +188,20 @@ mod tests {
                 key_capacity
             ]
         );
-        assert_eq!(
-            naga_struct(&common, "Stats").0 as usize,
-            std::mem::size_of::<Stats>()
+        assert_layout!(
+            &common,
+            Stats,
+            "Stats",
+            [
+                skipped_nonfinite,
+                skipped_degenerate,
+                visible,
+                intersections
+            ]
         );
         let scan = include_str!("../../../shaders/render/scan.wgsl");
-        check!(scan, ScanParams, "ScanParams", [n]);
+        assert_layout!(scan, ScanParams, "ScanParams", [n]);
         let sort = include_str!("../../../shaders/render/radix_sort.wgsl");
-        check!(sort, SortParams, "SortParams", [shift, num_blocks]);
+        assert_layout!(sort, SortParams, "SortParams", [shift, num_blocks]);
     }
 }
