@@ -473,6 +473,21 @@ impl GpuSim {
         gpu.check()
     }
 
+    /// Number of particles.
+    pub fn len(&self) -> u32 {
+        self.num_particles
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.num_particles == 0
+    }
+
+    /// Positions and masses (`vec4`), and deformation gradients (`mat3x3`), for passes that
+    /// read the particle state on the GPU (the derive pass).
+    pub fn state_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
+        (&self.buffers.x_mass, &self.buffers.deformation)
+    }
+
     /// Bytes of GPU memory this simulation holds (particles, sort, cells, grid).
     pub fn gpu_bytes(&self) -> u64 {
         let b = &self.buffers;

@@ -23,6 +23,7 @@
 
 pub mod bspline;
 pub mod cpu;
+pub mod derive;
 pub mod elasticity;
 pub mod gpu;
 pub mod nacc;

@@ -188,6 +188,12 @@ impl GpuRenderer {
         self.pair_limit = Some(max.max(1));
     }
 
+    /// The uploaded Gaussians on the GPU (`layout::GaussianIn` records): a simulation's
+    /// derive pass writes the deformed Gaussians here, so frames need no CPU round trip.
+    pub fn gaussian_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.splats.as_ref().map(|s| &s.gaussians)
+    }
+
     /// Upload a set of Gaussians (replacing the previous one).
     pub fn upload(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
         let n = splats.len() as u64;
@@ -214,7 +220,7 @@ impl GpuRenderer {
         let b = SplatBuffers {
             count: n as u32,
             sh_degree: splats.sh_degree,
-            gaussians: storage(device, "gaussians", n * 64, usage),
+            gaussians: storage(device, "gaussians", n * 64, wgpu::BufferUsages::COPY_SRC),
             sh_words: storage(device, "sh words", n * SH_WORDS as u64 * 4, usage),
             projected: storage(device, "projected", n * 48, usage),
             tile_rects: storage(device, "tile rects", n * 8, usage),

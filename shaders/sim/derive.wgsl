@@ -1,0 +1,79 @@
+// Derive (per particle, SPEC §6): the deformed Gaussian of a simulated particle, written
+// straight into the renderer's Gaussian buffer: mean x_p, covariance F A Fᵀ (A the rest
+// covariance in world space), and the rest-frame rotation composed with the rotation of
+// F's polar decomposition (SH are then evaluated along that frame). Opacity and SH are
+// unchanged. Mirrors `sim::derive::derive_gaussian`.
+
+struct DeriveParams {
+    // index of the first simulated Gaussian in the renderer's buffer
+    offset: u32,
+    count: u32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// What a particle's Gaussian looked like at rest.
+struct RestGaussian {
+    // rest covariance upper triangle: xx, xy, xz, yy
+    cov_a: vec4<f32>,
+    // yz, zz, opacity, unused
+    cov_b: vec4<f32>,
+    // rest-frame rotation (x, y, z, w)
+    rotation: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> params: DeriveParams;
+@group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> deformation: array<mat3x3<f32>>;
+@group(0) @binding(3) var<storage, read> rest: array<RestGaussian>;
+@group(0) @binding(4) var<storage, read_write> gaussians: array<GaussianIn>;
+
+// Unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method: divide by the
+// largest of the four candidates). m[c][r] is row r, column c.
+fn quat_from_rotation(m: mat3x3<f32>) -> vec4<f32> {
+    let t = m[0][0] + m[1][1] + m[2][2];
+    var q: vec4<f32>;
+    if t > 0.0 {
+        let s = sqrt(t + 1.0) * 2.0;
+        q = vec4<f32>(m[1][2] - m[2][1], m[2][0] - m[0][2], m[0][1] - m[1][0], 0.25 * s * s) / s;
+    } else if m[0][0] > m[1][1] && m[0][0] > m[2][2] {
+        let s = sqrt(1.0 + m[0][0] - m[1][1] - m[2][2]) * 2.0;
+        q = vec4<f32>(0.25 * s * s, m[1][0] + m[0][1], m[2][0] + m[0][2], m[1][2] - m[2][1]) / s;
+    } else if m[1][1] > m[2][2] {
+        let s = sqrt(1.0 + m[1][1] - m[0][0] - m[2][2]) * 2.0;
+        q = vec4<f32>(m[1][0] + m[0][1], 0.25 * s * s, m[2][1] + m[1][2], m[2][0] - m[0][2]) / s;
+    } else {
+        let s = sqrt(1.0 + m[2][2] - m[0][0] - m[1][1]) * 2.0;
+        q = vec4<f32>(m[2][0] + m[0][2], m[2][1] + m[1][2], 0.25 * s * s, m[0][1] - m[1][0]) / s;
+    }
+    return normalize(q);
+}
+
+// Hamilton product a ⊗ b of (x, y, z, w) quaternions: rotate by b, then by a.
+fn quat_mul(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(
+        a.w * b.xyz + b.w * a.xyz + cross(a.xyz, b.xyz),
+        a.w * b.w - dot(a.xyz, b.xyz));
+}
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let p = (wid.x + wid.y * nwg.x) * 256u + lid;
+    if p >= params.count {
+        return;
+    }
+    let r = rest[p];
+    let a = mat3x3<f32>(
+        vec3<f32>(r.cov_a.x, r.cov_a.y, r.cov_a.z),
+        vec3<f32>(r.cov_a.y, r.cov_a.w, r.cov_b.x),
+        vec3<f32>(r.cov_a.z, r.cov_b.x, r.cov_b.y));
+    let f = deformation[p];
+    let c = f * a * transpose(f);
+    let rot = quat_mul(quat_from_rotation(polar_rotation(f)), r.rotation);
+    gaussians[params.offset + p] = GaussianIn(
+        vec4<f32>(x_mass[p].xyz, r.cov_b.z),
+        vec4<f32>(c[0][0], c[1][0], c[2][0], c[1][1]),
+        vec4<f32>(c[2][1], c[2][2], 0.0, 0.0),
+        rot);
+}

@@ -1,0 +1,154 @@
+//! Deforming the Gaussians (SPEC §6) on the GPU: `shaders/sim/derive.wgsl` writes each
+//! simulated particle's Gaussian — mean x_p, covariance F A Fᵀ, rest frame rotated by
+//! polar(F) — into the renderer's Gaussian buffer, so a frame goes from simulation to
+//! image without a CPU round trip. [`derive_gaussian`] is the f64 twin the pass is tested
+//! against.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat3, DQuat, DVec3};
+use wgpu::util::DeviceExt;
+
+use super::gpu::GpuSim;
+use super::svd::polar;
+use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::render::splats::{mat3_from_sym3, Sym3};
+use crate::render::{GpuRenderer, Splats};
+
+/// `DeriveParams` of the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct DeriveParams {
+    pub offset: u32,
+    pub count: u32,
+    pub _pad: [u32; 2],
+}
+
+/// `RestGaussian` of the shader: a particle's Gaussian at rest (world space).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct RestGaussian {
+    pub cov_a: [f32; 4],
+    pub cov_b: [f32; 4],
+    pub rotation: [f32; 4],
+}
+
+/// The deformed Gaussian of a particle at `x` with deformation gradient `f`, whose rest
+/// covariance is `a` and rest-frame rotation `r0` (SPEC §6).
+pub fn derive_gaussian(x: DVec3, f: DMat3, a: DMat3, r0: DQuat) -> (DVec3, DMat3, DQuat) {
+    let (r, _) = polar(f);
+    (
+        x,
+        f * a * f.transpose(),
+        (DQuat::from_mat3(&r) * r0).normalize(),
+    )
+}
+
+/// The derive pass for one simulation whose particles are the Gaussians
+/// `offset .. offset + sim.len()` of the renderer's buffer.
+pub struct Derive {
+    kernel: Kernel,
+    bind: wgpu::BindGroup,
+    count: u32,
+    _buffers: [wgpu::Buffer; 2],
+}
+
+impl Derive {
+    /// `splats` are all the renderer's Gaussians (as uploaded); the simulated ones start at
+    /// `offset` and are in particle order.
+    pub fn new(
+        gpu: &GpuContext,
+        sim: &GpuSim,
+        renderer: &GpuRenderer,
+        splats: &Splats,
+        offset: u32,
+    ) -> Result<Derive, GpuError> {
+        let count = sim.len();
+        let end = offset as usize + count as usize;
+        let target = renderer
+            .gaussian_buffer()
+            .filter(|_| end <= splats.len())
+            .ok_or_else(|| {
+                GpuError::Failed(format!(
+                    "derive: Gaussians {offset}..{end} are not all uploaded to the renderer"
+                ))
+            })?;
+        let rest: Vec<RestGaussian> = (offset as usize..end)
+            .map(|i| {
+                let c: Sym3 = splats.covariances[i];
+                let q = splats.rotations[i];
+                RestGaussian {
+                    cov_a: [c[0], c[1], c[2], c[3]],
+                    cov_b: [c[4], c[5], splats.opacities[i], 0.0],
+                    rotation: [q.x, q.y, q.z, q.w],
+                }
+            })
+            .collect();
+        let device = &gpu.device;
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("derive params"),
+            contents: bytemuck::bytes_of(&DeriveParams {
+                offset,
+                count,
+                _pad: [0; 2],
+            }),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let mut rest_bytes = bytemuck::cast_slice::<RestGaussian, u8>(&rest).to_vec();
+        rest_bytes.resize(rest_bytes.len().max(256), 0);
+        let rest = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("derive rest Gaussians"),
+            contents: &rest_bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let kernel = Kernel::new(device, "derive", &source(), "main");
+        let (x_mass, deformation) = sim.state_buffers();
+        let bind = kernel.bind(device, &[&params, x_mass, deformation, &rest, target]);
+        Ok(Derive {
+            kernel,
+            bind,
+            count,
+            _buffers: [params, rest],
+        })
+    }
+
+    /// Record the pass.
+    pub fn record(&self, cpass: &mut wgpu::ComputePass) {
+        self.kernel
+            .dispatch(cpass, &self.bind, self.count.div_ceil(256));
+    }
+
+    /// Record and submit the pass on its own.
+    pub fn run(&self, gpu: &GpuContext) -> Result<(), GpuError> {
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        self.record(&mut enc.begin_compute_pass(&Default::default()));
+        gpu.queue.submit([enc.finish()]);
+        gpu.check()
+    }
+}
+
+fn source() -> String {
+    [
+        crate::render::gpu::COMMON,
+        super::wgsl::library().as_str(),
+        include_str!("../../shaders/sim/derive.wgsl"),
+    ]
+    .join("\n")
+}
+
+/// The rest covariance of Gaussian `i` of `splats` as a matrix (for the CPU twin).
+pub fn rest_covariance(splats: &Splats, i: usize) -> DMat3 {
+    mat3_from_sym3(splats.covariances[i]).as_dmat3()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn layouts_match_wgsl() {
+        let src = source();
+        assert_layout!(&src, DeriveParams, "DeriveParams", [offset, count]);
+        assert_layout!(&src, RestGaussian, "RestGaussian", [cov_a, cov_b, rotation]);
+    }
+}
