@@ -11,7 +11,10 @@ use glam::Vec3;
 use splatter::gpu::{BackendChoice, GpuContext};
 use splatter::output::{frame_path, FrameWriter, Progress};
 use splatter::render::GpuRenderer;
-use splatter::scene::{self, CameraPath, Scene};
+use splatter::scene::simulation::SimulationSetup;
+use splatter::scene::{self, BuildReport, CameraPath, Scene};
+use splatter::sim::derive::Derive;
+use splatter::sim::gpu::{GpuSim, Watchdog};
 
 #[derive(Parser)]
 #[command(
@@ -187,6 +190,27 @@ impl RenderArgs {
     }
 }
 
+/// The watchdog's stop message: frame, what was counted, the likely cause. Frames
+/// already written are complete (each was renamed into place).
+fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
+    let steps = format!("in the {} steps before frame {frame}", s.steps_per_frame);
+    if w.nonfinite > 0 {
+        format!(
+            "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}); likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
+            w.nonfinite, s.params.dt, s.grid.dx
+        )
+    } else {
+        let (lo, hi) = (s.grid.lo, s.grid.hi());
+        let v = |x: glam::DVec3| format!("[{:.3}, {:.3}, {:.3}]", x.x, x.y, x.z);
+        format!(
+            "simulation stopped: {} particle-steps left the domain {steps} ({} .. {}); likely cause: simulation.domain too small for the motion, or Δt too large",
+            w.escaped,
+            v(lo),
+            v(hi)
+        )
+    }
+}
+
 /// Parse `A..B`, `A..`, `..B` or `A` against `count` frames into a half-open range.
 fn frame_range(spec: Option<&str>, count: u32) -> Result<std::ops::Range<u32>> {
     let Some(spec) = spec else {
@@ -215,7 +239,9 @@ fn frame_range(spec: Option<&str>, count: u32) -> Result<std::ops::Range<u32>> {
 }
 
 /// The scene, its camera path and the frames to render, from the command line.
-fn prepare(args: &RenderArgs) -> Result<(Scene, CameraPath, splatter::render::Splats)> {
+fn prepare(
+    args: &RenderArgs,
+) -> Result<(Scene, CameraPath, splatter::render::Splats, BuildReport)> {
     for (flag, value) in [("--width", args.width), ("--height", args.height)] {
         if let Some(v) = value {
             if !(1..=scene::MAX_IMAGE_SIZE).contains(&v) {
@@ -239,13 +265,13 @@ fn prepare(args: &RenderArgs) -> Result<(Scene, CameraPath, splatter::render::Sp
     for w in report.warnings() {
         log::warn!("{w}");
     }
-    Ok((scene, path, splats))
+    Ok((scene, path, splats, report))
 }
 
 fn prepare_quick_look(
     args: &RenderArgs,
     ply: &std::path::Path,
-) -> Result<(Scene, CameraPath, splatter::render::Splats)> {
+) -> Result<(Scene, CameraPath, splatter::render::Splats, BuildReport)> {
     let text = format!(
         r#"{{"output": {{"width": {w}, "height": {h}, "frames": 60}},
             "camera": {{"fov_y_deg": 50, "path": {{"type": "orbit", "target": [0, 0, 0], "radius": 1}}}},
@@ -295,13 +321,15 @@ fn prepare_quick_look(
             CameraPath::orbit_framing(bounds, Vec3::Z, 50.0, w, h, scene.output.frames)
         }
     };
-    Ok((scene, path, splats))
+    Ok((scene, path, splats, report))
 }
 
 fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let started = Instant::now();
-    let (scene, path, splats) = prepare(&args)?;
+    let (scene, path, splats, report) = prepare(&args)?;
     let frames = frame_range(args.frames.as_deref(), scene.frame_count())?;
+    let setup = scene::simulation::prepare(&scene, splats.clone(), &report)?;
+    let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
@@ -320,13 +348,51 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let mut renderer = GpuRenderer::new(&gpu);
     renderer.upload(&gpu, &splats)?;
     let background = Vec3::from(scene.output.background);
+    let sim = match &setup {
+        Some(s) => {
+            for w in &s.warnings {
+                log::warn!("{w}");
+            }
+            eprintln!(
+                "simulation: {} particles, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame",
+                s.particles.len(),
+                s.materials.len(),
+                s.grid.cells.x,
+                s.grid.cells.y,
+                s.grid.cells.z,
+                s.grid.dx,
+                s.params.dt,
+                s.steps_per_frame
+            );
+            let gpu_sim = GpuSim::new(&gpu, &s.particles, &s.grid, &s.materials, &s.params)?;
+            let derive = Derive::new(&gpu, &gpu_sim, &renderer, &s.splats, s.static_count as u32)?;
+            Some((gpu_sim, derive, s))
+        }
+        None => None,
+    };
 
     let workers = FrameWriter::default_workers();
     let mut writer = FrameWriter::new(workers, 2 * workers);
     let mut progress = Progress::new(u64::from(frames.end - frames.start), "render");
     let render_start = Instant::now();
     let mut gpu_ms = 0.0;
-    for frame in frames.clone() {
+    // Frame f shows the state after f · steps_per_frame steps; a range that starts later
+    // simulates the frames before it without rendering them.
+    let first = if sim.is_some() { 0 } else { frames.start };
+    for frame in first..frames.end {
+        if let Some((gpu_sim, derive, s)) = &sim {
+            if frame > 0 {
+                gpu_sim.step(&gpu, s.steps_per_frame)?;
+            }
+            let w = gpu_sim.take_watchdog(&gpu)?;
+            if w.nonfinite > 0 || w.escaped > 0 {
+                bail!("{}", watchdog_message(frame, w, s));
+            }
+            if frame < frames.start {
+                continue;
+            }
+            derive.run(&gpu)?;
+        }
         let camera = path.camera(frame);
         let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;
         gpu_ms += timings.render_ms + timings.readback_ms;

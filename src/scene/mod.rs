@@ -9,6 +9,7 @@
 //! ([`Scene::validate`]). Errors name the file, the field path and the offending value.
 
 mod path;
+pub mod simulation;
 
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -125,6 +126,9 @@ pub struct Scene {
     /// The objects drawn, in order.
     #[serde(default)]
     pub objects: Vec<ObjectSpec>,
+    /// The MPM simulation of the objects that have `physics` (see docs/physics.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub simulation: Option<simulation::SimulationSpec>,
     /// Folder that relative paths in the scene (PLY files, cameras.json) resolve against:
     /// the scene file's folder.
     #[serde(skip)]
@@ -292,6 +296,9 @@ pub struct ObjectSpec {
     /// Placement in the world. Default: identity.
     #[serde(default)]
     pub transform: TransformSpec,
+    /// Simulate this object (needs the scene's `simulation` block). Default: static.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<simulation::PhysicsSpec>,
 }
 
 /// x_world = R · diag(scale) · x_object + translate, R from `rotate_deg`.

@@ -174,6 +174,13 @@ impl GpuStep {
     }
 }
 
+/// What the watchdog counted (particle-steps, summed over the steps since the last read).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Watchdog {
+    pub nonfinite: u32,
+    pub escaped: u32,
+}
+
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
 /// declarations, then the pass.
 fn source(pass: &str) -> String {
@@ -213,6 +220,7 @@ struct Buffers {
     ranges: wgpu::Buffer,
     grid: wgpu::Buffer,
     node_active: wgpu::Buffer,
+    flags: wgpu::Buffer,
 }
 
 struct Binds {
@@ -359,6 +367,7 @@ impl GpuSim {
             ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
             grid: zeroed(gpu, "sim grid", u64::from(nodes) * 16),
             node_active: zeroed(gpu, "sim active nodes", u64::from(nodes) * 4),
+            flags: zeroed(gpu, "sim watchdog flags", 16),
         };
         let b = &buffers;
         let sort = kernels.sort.plan(
@@ -425,6 +434,7 @@ impl GpuSim {
                     &b.alpha,
                     &b.material,
                     &b.grid,
+                    &b.flags,
                 ],
             ),
             sort,
@@ -510,6 +520,27 @@ impl GpuSim {
         .iter()
         .map(|buf| buf.size())
         .sum()
+    }
+
+    /// The watchdog (SPEC §2): particles that became non-finite, and particles that left the
+    /// domain, over the steps since the last call (a 16-byte readback; then cleared).
+    pub fn take_watchdog(&self, gpu: &GpuContext) -> Result<Watchdog, GpuError> {
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sim watchdog readback"),
+            size: 16,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.buffers.flags, 0, &staging, 0, Some(16));
+        enc.clear_buffer(&self.buffers.flags, 0, None);
+        gpu.queue.submit([enc.finish()]);
+        let bytes = read_buffer(gpu, &staging)?;
+        let v: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        Ok(Watchdog {
+            nonfinite: v[0],
+            escaped: v[1],
+        })
     }
 
     /// Copy the particle state back (positions, velocities, F, C, α; masses, volumes and

@@ -10,6 +10,9 @@
 @group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
 @group(0) @binding(6) var<storage, read> material: array<u32>;
 @group(0) @binding(7) var<storage, read> grid: array<vec4<f32>>;
+// The watchdog's counters (SPEC §2): [0] particles with a non-finite position, velocity or
+// F; [1] particles whose stencil is off the grid (left the domain). Read once per frame.
+@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 4>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -22,6 +25,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let vv = v_volume[p];
     let st = grid_stencil(step, xm.xyz);
     if !st.ok {
+        if sim_is_finite3(xm.xyz) {
+            atomicAdd(&flags[1], 1u);
+        } else {
+            atomicAdd(&flags[0], 1u);
+        }
         let v = vv.xyz + step.gravity * step.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
         x_mass[p] = vec4<f32>(xm.xyz + v * step.dt, xm.w);
@@ -47,11 +55,14 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     affine_velocity[p] = c;
     x_mass[p] = vec4<f32>(xm.xyz + vp * step.dt, xm.w);
     let m = step.materials[material[p]];
+    var f_new = f_trial;
     if m.kind == MATERIAL_NACC {
         let r = nacc_return_map(f_trial, alpha[p], m.nacc);
-        deformation[p] = r.f;
+        f_new = r.f;
         alpha[p] = r.alpha;
-    } else {
-        deformation[p] = f_trial;
+    }
+    deformation[p] = f_new;
+    if !(sim_is_finite3(vp) && sim_is_finite_mat3(f_new)) {
+        atomicAdd(&flags[0], 1u);
     }
 }

@@ -1,0 +1,528 @@
+//! The scene file's simulation: the `simulation` block (grid, step, gravity, boundaries) and
+//! each object's `physics` (material, initial velocity), turned into what the MPM step
+//! needs (SPEC §1–§4). Every Gaussian of a simulated object is a particle; interior filling
+//! is issue 5.
+
+use glam::DVec3;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{BuildReport, Scene, SceneError};
+use crate::render::Splats;
+use crate::sim::cpu::{
+    cfl_dt, Boundaries, BoundaryKind, Condition, DomainWalls, Grid, Material, Particles,
+    PlaneCollider, StepParams, Transfer,
+};
+use crate::sim::nacc::{m_from_friction_angle, Case3Variant, NaccParams};
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.8]
+}
+fn default_cfl() -> f64 {
+    0.4
+}
+
+/// The `simulation` block.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Grid spacing Δx.
+    pub dx: f64,
+    /// Step Δt in seconds. Default: from the CFL condition Δt = cfl · Δx / c over the
+    /// materials (c = sqrt((λ + 2μ)/ρ)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// CFL number for the default Δt (and the check of a given one). Default 0.4.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// The simulated box: only what moves is gridded.
+    pub domain: DomainSpec,
+    /// Default [0, 0, −9.8] (z up).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Condition on the domain's faces. Default `separate`, no friction.
+    #[serde(default)]
+    pub walls: ConditionSpec,
+    /// Condition on the bottom face (−z) only, e.g. a frictional or sticky ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<ConditionSpec>,
+    /// Planar colliders (at most 8).
+    #[serde(default)]
+    pub colliders: Vec<ColliderSpec>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+/// `sticky` (v = 0), `slip` (normal velocity removed) or `separate` (only the velocity into
+/// the obstacle removed), with Coulomb friction on the tangential part.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConditionSpec {
+    pub kind: ConditionKind,
+    #[serde(default)]
+    pub friction: f64,
+}
+
+impl Default for ConditionSpec {
+    fn default() -> Self {
+        ConditionSpec {
+            kind: ConditionKind::Separate,
+            friction: 0.0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ConditionKind {
+    Sticky,
+    Slip,
+    Separate,
+}
+
+/// The solid half-space (x − point)·normal ≤ 0.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderSpec {
+    pub point: [f64; 3],
+    /// Outward normal (normalised on use).
+    pub normal: [f64; 3],
+    #[serde(flatten)]
+    pub condition: ConditionSpec,
+}
+
+/// An object's `physics`: it is simulated, with this material and initial motion.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PhysicsSpec {
+    pub material: MaterialSpec,
+    /// Initial velocity. Default 0.
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Initial angular velocity (rad/s) about the object's centre of mass. Default 0.
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+}
+
+/// A material (SPEC §3–§4, parameters as in the paper's table).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// Elastic, fixed corotated.
+    FixedCorotated {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    /// Elastic, Neo-Hookean (Borden).
+    NeoHookean {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    /// CD-MPM: Non-Associated Cam-Clay on Neo-Hookean, with hardening.
+    Nacc {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+        alpha0: f64,
+        beta: f64,
+        xi: f64,
+        /// Slope M of the critical-state line (or give `friction_angle_deg`).
+        #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
+        m_slope: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        friction_angle_deg: Option<f64>,
+        /// Case-3 return mapping: `center`, `continuous` (default) or `closest_point`.
+        #[serde(default = "default_mapping")]
+        return_mapping: ReturnMappingSpec,
+        /// Exponent k of the `continuous` mapping. Default 2.
+        #[serde(default = "default_k")]
+        k: f64,
+    },
+}
+
+fn default_mapping() -> ReturnMappingSpec {
+    ReturnMappingSpec::Continuous
+}
+fn default_k() -> f64 {
+    2.0
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ReturnMappingSpec {
+    Center,
+    Continuous,
+    ClosestPoint,
+}
+
+impl MaterialSpec {
+    pub fn density(&self) -> f64 {
+        match self {
+            MaterialSpec::FixedCorotated { density, .. }
+            | MaterialSpec::NeoHookean { density, .. }
+            | MaterialSpec::Nacc { density, .. } => *density,
+        }
+    }
+
+    /// Check the values and build the material; `field` names it in errors.
+    pub fn build(&self, origin: &str, field: &str) -> Result<Material, SceneError> {
+        let bad = |name: &str, v: f64, expected: &str| {
+            SceneError::invalid(origin, format!("{field}.{name}"), v, expected)
+        };
+        let (e, nu, density) = match self {
+            MaterialSpec::FixedCorotated { e, nu, density }
+            | MaterialSpec::NeoHookean { e, nu, density }
+            | MaterialSpec::Nacc { e, nu, density, .. } => (*e, *nu, *density),
+        };
+        if !(e.is_finite() && e > 0.0) {
+            return Err(bad("E", e, "Young's modulus > 0"));
+        }
+        if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+            return Err(bad("nu", nu, "a Poisson ratio in (−1, 0.5)"));
+        }
+        if !(density.is_finite() && density > 0.0) {
+            return Err(bad("density", density, "a density > 0"));
+        }
+        Ok(match self {
+            MaterialSpec::FixedCorotated { .. } => Material::fixed_corotated(e, nu),
+            MaterialSpec::NeoHookean { .. } => Material::neo_hookean(e, nu),
+            MaterialSpec::Nacc {
+                alpha0,
+                beta,
+                xi,
+                m_slope,
+                friction_angle_deg,
+                return_mapping,
+                k,
+                ..
+            } => {
+                let m_slope = match (m_slope, friction_angle_deg) {
+                    (Some(m), None) if m.is_finite() && *m > 0.0 => *m,
+                    (Some(m), None) => return Err(bad("M", *m, "a slope > 0")),
+                    (None, Some(phi)) if phi.is_finite() && *phi > 0.0 && *phi < 90.0 => {
+                        m_from_friction_angle(phi.to_radians())
+                    }
+                    (None, Some(phi)) => {
+                        return Err(bad("friction_angle_deg", *phi, "an angle in (0, 90)"))
+                    }
+                    _ => {
+                        return Err(SceneError::invalid(
+                            origin,
+                            field.to_string(),
+                            "M and friction_angle_deg",
+                            "exactly one of `M` or `friction_angle_deg`",
+                        ))
+                    }
+                };
+                for (name, v, ok) in [
+                    ("alpha0", *alpha0, alpha0.is_finite()),
+                    ("beta", *beta, beta.is_finite() && *beta >= 0.0),
+                    ("xi", *xi, xi.is_finite() && *xi >= 0.0),
+                    ("k", *k, k.is_finite() && *k > 0.0),
+                ] {
+                    if !ok {
+                        return Err(bad(name, v, "a finite value (β, ξ ≥ 0; k > 0)"));
+                    }
+                }
+                let variant = match return_mapping {
+                    ReturnMappingSpec::Center => Case3Variant::Center,
+                    ReturnMappingSpec::Continuous => Case3Variant::Continuous { k: *k },
+                    ReturnMappingSpec::ClosestPoint => Case3Variant::ClosestPoint,
+                };
+                Material::Nacc {
+                    params: NaccParams {
+                        e,
+                        nu,
+                        alpha0: *alpha0,
+                        beta: *beta,
+                        xi: *xi,
+                        m_slope,
+                    },
+                    variant,
+                }
+            }
+        })
+    }
+}
+
+impl ConditionSpec {
+    fn build(&self, origin: &str, field: &str) -> Result<Condition, SceneError> {
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(SceneError::invalid(
+                origin,
+                format!("{field}.friction"),
+                self.friction,
+                "a friction coefficient ≥ 0",
+            ));
+        }
+        let kind = match self.kind {
+            ConditionKind::Sticky => BoundaryKind::Sticky,
+            ConditionKind::Slip => BoundaryKind::Slip,
+            ConditionKind::Separate => BoundaryKind::Separate,
+        };
+        Ok(Condition {
+            kind,
+            friction: self.friction,
+        })
+    }
+}
+
+/// Everything the simulate-and-render loop needs.
+pub struct SimulationSetup {
+    /// All Gaussians, static objects first, then the simulated ones in particle order.
+    pub splats: Splats,
+    /// Index of the first simulated Gaussian.
+    pub static_count: usize,
+    pub particles: Particles,
+    pub grid: Grid,
+    pub materials: Vec<Material>,
+    pub params: StepParams,
+    /// Steps per output frame: ⌈(1/fps) / Δt⌉ (Δt shrunk to divide the frame exactly).
+    pub steps_per_frame: u32,
+    /// Messages for the user (a Δt above the CFL bound, …).
+    pub warnings: Vec<String>,
+}
+
+fn vec3(v: [f64; 3]) -> DVec3 {
+    DVec3::from_array(v)
+}
+
+/// Turn `splats` (as built by [`Scene::build_splats`], objects in file order with the
+/// counts of `report`) into a simulation, or `None` when the scene simulates nothing.
+pub fn prepare(
+    scene: &Scene,
+    splats: Splats,
+    report: &BuildReport,
+) -> Result<Option<SimulationSetup>, SceneError> {
+    let o = scene.origin.as_str();
+    let simulated: Vec<usize> = (0..scene.objects.len())
+        .filter(|&i| scene.objects[i].physics.is_some())
+        .collect();
+    let Some(spec) = &scene.simulation else {
+        if let Some(&i) = simulated.first() {
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics"),
+                "set",
+                "a `simulation` block in the scene",
+            ));
+        }
+        return Ok(None);
+    };
+    if simulated.is_empty() {
+        return Ok(None);
+    }
+    let (lo, hi) = (vec3(spec.domain.lo), vec3(spec.domain.hi));
+    if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
+        return Err(SceneError::invalid(
+            o,
+            "simulation.domain",
+            format!("{lo} .. {hi}"),
+            "finite lo < hi on every axis",
+        ));
+    }
+    let dx = spec.dx;
+    let cells = ((hi - lo) / dx).ceil();
+    if !(dx.is_finite() && dx > 0.0) || cells.min_element() < 4.0 || cells.element_product() > 64e6
+    {
+        return Err(SceneError::invalid(
+            o,
+            "simulation.dx",
+            dx,
+            "a spacing > 0 giving 4 to 400 cells per axis (at most 64M cells)",
+        ));
+    }
+    let grid = Grid::new(lo, hi, dx);
+    let mut walls = DomainWalls::uniform(spec.walls.build(o, "simulation.walls")?);
+    if let Some(g) = &spec.ground {
+        walls.faces[4] = g.build(o, "simulation.ground")?;
+    }
+    if spec.colliders.len() > crate::sim::gpu::MAX_COLLIDERS {
+        return Err(SceneError::invalid(
+            o,
+            "simulation.colliders",
+            spec.colliders.len(),
+            "at most 8 colliders",
+        ));
+    }
+    let mut colliders = Vec::new();
+    for (i, c) in spec.colliders.iter().enumerate() {
+        let n = vec3(c.normal);
+        if !(n.is_finite() && n.length() > 0.0 && vec3(c.point).is_finite()) {
+            return Err(SceneError::invalid(
+                o,
+                format!("simulation.colliders[{i}].normal"),
+                n,
+                "a finite non-zero normal",
+            ));
+        }
+        colliders.push(PlaneCollider {
+            point: vec3(c.point),
+            normal: n.normalize(),
+            condition: c
+                .condition
+                .build(o, &format!("simulation.colliders[{i}]"))?,
+        });
+    }
+
+    // Object ranges in `splats` (file order).
+    let mut starts = Vec::with_capacity(report.objects.len());
+    let mut acc = 0;
+    for r in &report.objects {
+        starts.push(acc);
+        acc += r.gaussians;
+    }
+    let range = |i: usize| starts[i]..starts[i] + report.objects[i].gaussians;
+    let order: Vec<usize> = (0..scene.objects.len())
+        .filter(|i| scene.objects[*i].physics.is_none())
+        .chain(simulated.iter().copied())
+        .collect();
+    let mut out = Splats {
+        sh_degree: splats.sh_degree,
+        ..Default::default()
+    };
+    let mut materials = Vec::new();
+    let mut particles = Particles::new();
+    let mut static_count = 0;
+    let mut warnings = Vec::new();
+    let mut dt_cfl = f64::INFINITY;
+    for &i in &order {
+        let r = range(i);
+        let part = subset(&splats, r.clone());
+        let obj = &scene.objects[i];
+        match &obj.physics {
+            None => static_count += part.len(),
+            Some(physics) => {
+                let field = format!("objects[{i}].physics.material");
+                let material = physics.material.build(o, &field)?;
+                let density = physics.material.density();
+                dt_cfl = dt_cfl.min(cfl_dt(&material, density, dx, spec.cfl));
+                let volume = particle_volume(obj, &part);
+                let m_index = materials.len() as u32;
+                materials.push(material);
+                let centre = part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>()
+                    / part.len().max(1) as f64;
+                let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
+                for m in &part.means {
+                    let x = m.as_dvec3();
+                    if grid.stencil(x).is_none() {
+                        return Err(SceneError::invalid(
+                            o,
+                            format!("objects[{i}]"),
+                            format!("a Gaussian at {x}"),
+                            format!("every simulated Gaussian inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
+                        ));
+                    }
+                    particles.push(
+                        x,
+                        v0 + w0.cross(x - centre),
+                        density * volume,
+                        volume,
+                        m_index,
+                        0.0,
+                    );
+                }
+                let start = particles.len() - part.len();
+                // APIC: a rigid spin has velocity gradient C = [ω]×.
+                let skew = glam::DMat3::from_cols(
+                    DVec3::new(0.0, w0.z, -w0.y),
+                    DVec3::new(-w0.z, 0.0, w0.x),
+                    DVec3::new(w0.y, -w0.x, 0.0),
+                );
+                for p in start..particles.len() {
+                    particles.c[p] = skew;
+                    particles.alpha[p] = material.initial_alpha();
+                }
+            }
+        }
+        out.append(part);
+    }
+    let frame = 1.0 / f64::from(scene.output.fps);
+    let dt = match spec.dt {
+        Some(dt) if dt.is_finite() && dt > 0.0 => {
+            if dt > dt_cfl {
+                warnings.push(format!(
+                    "simulation.dt = {dt:e} exceeds the CFL bound {dt_cfl:.3e} (cfl {}, Δx {dx}): expect instability; suggested dt ≤ {dt_cfl:.3e}",
+                    spec.cfl
+                ));
+            }
+            dt
+        }
+        Some(dt) => {
+            return Err(SceneError::invalid(
+                o,
+                "simulation.dt",
+                dt,
+                "a step > 0 in seconds",
+            ))
+        }
+        None => dt_cfl,
+    };
+    let steps_per_frame = (frame / dt).ceil().max(1.0);
+    if steps_per_frame > 1e7 {
+        return Err(SceneError::invalid(
+            o,
+            "simulation.dt",
+            dt,
+            "a step giving at most 10⁷ steps per frame",
+        ));
+    }
+    let params = StepParams {
+        dt: frame / steps_per_frame,
+        gravity: vec3(spec.gravity),
+        boundaries: Boundaries { walls, colliders },
+        transfer: Transfer::Apic,
+    };
+    Ok(Some(SimulationSetup {
+        splats: out,
+        static_count,
+        particles,
+        grid,
+        materials,
+        params,
+        steps_per_frame: steps_per_frame as u32,
+        warnings,
+    }))
+}
+
+/// Rest volume per particle: a procedural object's lattice cell (spacing³); for a PLY, the
+/// object's bounding-box volume shared equally (a stand-in until interior filling, issue 5,
+/// gives real volumes).
+fn particle_volume(obj: &super::ObjectSpec, part: &Splats) -> f64 {
+    let (m, _) = obj.transform.affine();
+    let scale = f64::from(m.determinant().abs());
+    if let Some(p) = &obj.procedural {
+        return f64::from(p.spacing).powi(3) * scale;
+    }
+    let lo = part
+        .means
+        .iter()
+        .fold(DVec3::INFINITY, |a, m| a.min(m.as_dvec3()));
+    let hi = part
+        .means
+        .iter()
+        .fold(DVec3::NEG_INFINITY, |a, m| a.max(m.as_dvec3()));
+    ((hi - lo).max(DVec3::splat(1e-6)).element_product() / part.len().max(1) as f64).max(1e-12)
+}
+
+fn subset(s: &Splats, r: std::ops::Range<usize>) -> Splats {
+    let k = s.sh_stride();
+    Splats {
+        means: s.means[r.clone()].to_vec(),
+        covariances: s.covariances[r.clone()].to_vec(),
+        rotations: s.rotations[r.clone()].to_vec(),
+        opacities: s.opacities[r.clone()].to_vec(),
+        sh_degree: s.sh_degree,
+        sh: s.sh[r.start * k..r.end * k].to_vec(),
+    }
+}
