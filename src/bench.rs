@@ -152,15 +152,15 @@ pub fn sim_bench(gpu: &GpuContext, steps: u32, quick: bool, out: &mut dyn Write)
     use crate::sim::cpu::{
         cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
     };
-    use crate::sim::gpu::GpuSim;
+    use crate::sim::gpu::{GpuSim, P2gPath};
     use crate::sim::nacc::{Case3Variant, NaccParams};
     use glam::DVec3;
 
     writeln!(out, "adapter: {}", gpu.describe())?;
     writeln!(
         out,
-        "{:>10} {:>6} {:>8} {:>12} {:>14} {:>12}",
-        "particles", "grid", "steps", "ms/step", "ns/particle-step", "bytes/particle"
+        "{:>10} {:>6} {:>7} {:>6} {:>10} {:>16} {:>14}",
+        "particles", "grid", "p2g", "steps", "ms/step", "ns/particle-step", "bytes/particle"
     )?;
     let material = Material::Nacc {
         params: NaccParams {
@@ -195,25 +195,32 @@ pub fn sim_bench(gpu: &GpuContext, steps: u32, quick: bool, out: &mut dyn Write)
             },
             transfer: Transfer::Apic,
         };
-        let sim = GpuSim::new(gpu, &particles, &grid, &[material], &params)?;
-        sim.step(gpu, 1)?;
-        gpu.wait()?;
-        let start = Instant::now();
-        sim.step(gpu, steps)?;
-        gpu.wait()?;
-        let secs = start.elapsed().as_secs_f64();
-        let np = particles.len() as f64;
-        writeln!(
-            out,
-            "{:>10} {:>5}³ {:>8} {:>12.2} {:>14.1} {:>12.0}",
-            particles.len(),
-            cells,
-            steps,
-            secs * 1e3 / f64::from(steps),
-            secs * 1e9 / (f64::from(steps) * np),
-            sim.gpu_bytes() as f64 / np
-        )?;
-        out.flush()?;
+        let mut paths = vec![P2gPath::Gather];
+        if gpu.features.float32_atomics {
+            paths.push(P2gPath::Atomic);
+        }
+        for path in paths {
+            let sim = GpuSim::with_path(gpu, &particles, &grid, &[material], &params, path)?;
+            sim.step(gpu, 1)?;
+            gpu.wait()?;
+            let start = Instant::now();
+            sim.step(gpu, steps)?;
+            gpu.wait()?;
+            let secs = start.elapsed().as_secs_f64();
+            let np = particles.len() as f64;
+            writeln!(
+                out,
+                "{:>10} {:>5}³ {:>7} {:>6} {:>10.2} {:>16.1} {:>14.0}",
+                particles.len(),
+                cells,
+                format!("{path:?}").to_lowercase(),
+                steps,
+                secs * 1e3 / f64::from(steps),
+                secs * 1e9 / (f64::from(steps) * np),
+                sim.gpu_bytes() as f64 / np
+            )?;
+            out.flush()?;
+        }
     }
     Ok(())
 }

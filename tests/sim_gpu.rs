@@ -9,13 +9,22 @@ use splatter::sim::cpu::{
     cfl_dt, step, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
 };
-use splatter::sim::gpu::GpuSim;
+use splatter::sim::gpu::{GpuSim, P2gPath};
 use splatter::sim::nacc::{Case3Variant, NaccParams};
 
 const G: f64 = 9.8;
 
 fn gpus() -> Vec<GpuContext> {
     splatter::gpu::test_contexts()
+}
+
+/// The P2G paths an adapter can run: the gather always, atomics where supported.
+fn paths(gpu: &GpuContext) -> Vec<P2gPath> {
+    let mut list = vec![P2gPath::Gather];
+    if gpu.features.float32_atomics {
+        list.push(P2gPath::Atomic);
+    }
+    list
 }
 
 struct Scene {
@@ -31,17 +40,19 @@ struct Scene {
 /// the largest position difference in units of Δx, and both end states.
 fn compare(
     gpu: &GpuContext,
+    path: P2gPath,
     scene: &Scene,
     steps: u32,
     chunks: u32,
 ) -> (f64, Particles, Particles) {
     let mut grid = Grid::new(scene.grid_lo, scene.grid_hi, scene.dx);
-    let sim = GpuSim::new(
+    let sim = GpuSim::with_path(
         gpu,
         &scene.particles,
         &grid,
         &scene.materials,
         &scene.params,
+        path,
     )
     .unwrap();
     let mut cpu = scene.particles.clone();
@@ -149,21 +160,23 @@ fn gpu_elastic_step_matches_the_cpu_reference() {
                     },
                 ),
             };
-            let (worst, cpu, _) = compare(&gpu, &scene, 150, 3);
-            let moved = cpu
-                .x
-                .iter()
-                .zip(&scene.particles.x)
-                .map(|(a, b)| (*a - *b).length())
-                .fold(0.0, f64::max);
-            eprintln!(
-                "{}: {material:?}: {} particles, 150 steps, moved up to {:.1} Δx; GPU vs CPU max |Δx| = {worst:.2e} Δx",
+            for path in paths(&gpu) {
+                let (worst, cpu, _) = compare(&gpu, path, &scene, 150, 3);
+                let moved = cpu
+                    .x
+                    .iter()
+                    .zip(&scene.particles.x)
+                    .map(|(a, b)| (*a - *b).length())
+                    .fold(0.0, f64::max);
+                eprintln!(
+                "{} ({path:?} P2G): {material:?}: {} particles, 150 steps, moved up to {:.1} Δx; GPU vs CPU max |Δx| = {worst:.2e} Δx",
                 gpu.describe(),
                 scene.particles.len(),
                 moved / dx
             );
-            assert!(moved / dx > 2.0, "the scene should move");
-            assert!(worst < 1e-3, "GPU and CPU differ by {worst} Δx");
+                assert!(moved / dx > 2.0, "the scene should move");
+                assert!(worst < 1e-3, "GPU and CPU differ by {worst} Δx");
+            }
         }
     }
 }
@@ -210,26 +223,28 @@ fn gpu_nacc_step_matches_the_cpu_reference() {
                 },
             ),
         };
-        let (worst, cpu, out) = compare(&gpu, &scene, 120, 2);
-        let yielded = cpu
-            .alpha
-            .iter()
-            .filter(|a| (**a + 0.04).abs() > 1e-3)
-            .count();
-        let alpha_err = cpu
-            .alpha
-            .iter()
-            .zip(&out.alpha)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        eprintln!(
-            "{}: NACC sphere, {} particles, 120 steps: {yielded} yielded; GPU vs CPU max |Δx| = {worst:.2e} Δx, max |Δα| = {alpha_err:.2e}",
+        for path in paths(&gpu) {
+            let (worst, cpu, out) = compare(&gpu, path, &scene, 120, 2);
+            let yielded = cpu
+                .alpha
+                .iter()
+                .filter(|a| (**a + 0.04).abs() > 1e-3)
+                .count();
+            let alpha_err = cpu
+                .alpha
+                .iter()
+                .zip(&out.alpha)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            eprintln!(
+            "{} ({path:?} P2G): NACC sphere, {} particles, 120 steps: {yielded} yielded; GPU vs CPU max |Δx| = {worst:.2e} Δx, max |Δα| = {alpha_err:.2e}",
             gpu.describe(),
             scene.particles.len()
         );
-        assert!(yielded > 0, "the impact should yield some particles");
-        assert!(out.x.iter().all(|x| x.is_finite()));
-        assert!(worst < 1e-2, "GPU and CPU differ by {worst} Δx");
-        assert!(alpha_err < 1e-2, "α differs by {alpha_err}");
+            assert!(yielded > 0, "the impact should yield some particles");
+            assert!(out.x.iter().all(|x| x.is_finite()));
+            assert!(worst < 1e-2, "GPU and CPU differ by {worst} Δx");
+            assert!(alpha_err < 1e-2, "α differs by {alpha_err}");
+        }
     }
 }

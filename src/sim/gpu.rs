@@ -193,6 +193,37 @@ fn source(pass: &str) -> String {
     .join("\n")
 }
 
+/// How P2G sums particle contributions on the grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum P2gPath {
+    /// Sort by cell, then each node gathers in a fixed order: deterministic, needs no
+    /// atomics (runs on every backend).
+    Gather,
+    /// Each particle adds to its 27 nodes with float atomics (SHADER_FLOAT32_ATOMIC): no
+    /// sort; the summation order, and so the last bits, vary between runs.
+    Atomic,
+}
+
+impl P2gPath {
+    /// Atomics where the adapter has them, else the gather.
+    pub fn best(gpu: &GpuContext) -> P2gPath {
+        if gpu.features.float32_atomics {
+            P2gPath::Atomic
+        } else {
+            P2gPath::Gather
+        }
+    }
+}
+
+/// The atomic path's passes (built only on adapters with float atomics).
+struct AtomicPasses {
+    scatter: Kernel,
+    grid: Kernel,
+    scatter_bind: wgpu::BindGroup,
+    grid_bind: wgpu::BindGroup,
+    sums: wgpu::Buffer,
+}
+
 struct Kernels {
     prepare: Kernel,
     mark_nodes: Kernel,
@@ -234,6 +265,8 @@ struct Binds {
 
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
 pub struct GpuSim {
+    path: P2gPath,
+    atomic: Option<AtomicPasses>,
     kernels: Kernels,
     buffers: Buffers,
     binds: Binds,
@@ -284,7 +317,8 @@ fn zeroed(gpu: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
 
 impl GpuSim {
     /// Upload `particles` for stepping on `grid` (its box, spacing and cell count) with
-    /// `materials` and `params` (Δt, gravity, boundaries, transfer).
+    /// `materials` and `params` (Δt, gravity, boundaries, transfer), with the adapter's best
+    /// P2G path ([`P2gPath::best`]).
     pub fn new(
         gpu: &GpuContext,
         particles: &Particles,
@@ -292,6 +326,24 @@ impl GpuSim {
         materials: &[Material],
         params: &StepParams,
     ) -> Result<GpuSim, SimSetupError> {
+        Self::with_path(gpu, particles, grid, materials, params, P2gPath::best(gpu))
+    }
+
+    /// As [`new`](Self::new) with a chosen P2G path (`Atomic` needs float atomics).
+    pub fn with_path(
+        gpu: &GpuContext,
+        particles: &Particles,
+        grid: &Grid,
+        materials: &[Material],
+        params: &StepParams,
+        path: P2gPath,
+    ) -> Result<GpuSim, SimSetupError> {
+        if path == P2gPath::Atomic && !gpu.features.float32_atomics {
+            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
+                "the atomic P2G path needs float atomics, which {} lacks",
+                gpu.describe()
+            ))));
+        }
         let n = particles.len() as u32;
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
@@ -439,7 +491,33 @@ impl GpuSim {
             ),
             sort,
         };
+        let atomic = (path == P2gPath::Atomic).then(|| {
+            let b = &buffers;
+            let sums = zeroed(gpu, "sim grid sums", u64::from(nodes) * 16);
+            let scatter = Kernel::new(
+                device,
+                "sim p2g_scatter",
+                &source(include_str!("../../shaders/sim/step/p2g_scatter.wgsl")),
+                "main",
+            );
+            let grid = Kernel::new(
+                device,
+                "sim grid_from_sums",
+                &source(include_str!("../../shaders/sim/step/grid_from_sums.wgsl")),
+                "main",
+            );
+            AtomicPasses {
+                scatter_bind: scatter
+                    .bind(device, &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &sums]),
+                grid_bind: grid.bind(device, &[&b.step, &sums, &b.grid]),
+                scatter,
+                grid,
+                sums,
+            }
+        });
         Ok(GpuSim {
+            path,
+            atomic,
             kernels,
             buffers,
             binds,
@@ -459,28 +537,50 @@ impl GpuSim {
                 label: Some("sim steps"),
             });
         for _ in 0..steps {
-            enc.clear_buffer(&b.ranges, 0, None);
-            enc.clear_buffer(&b.node_active, 0, None);
+            match &self.atomic {
+                Some(a) => enc.clear_buffer(&a.sums, 0, None),
+                None => {
+                    enc.clear_buffer(&b.ranges, 0, None);
+                    enc.clear_buffer(&b.node_active, 0, None);
+                }
+            }
             let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("sim step"),
                 timestamp_writes: None,
             });
             if self.num_particles > 0 {
                 k.prepare.dispatch(&mut c, &bind.prepare, particle_groups);
-                k.sort.record(&mut c, &k.scan, &bind.sort);
-                k.ranges
-                    .kernel
-                    .dispatch(&mut c, &bind.ranges, particle_groups);
-                k.mark_nodes
-                    .dispatch(&mut c, &bind.mark_nodes, particle_groups);
             }
-            k.p2g.dispatch(&mut c, &bind.p2g, node_groups);
+            match &self.atomic {
+                Some(a) => {
+                    if self.num_particles > 0 {
+                        a.scatter.dispatch(&mut c, &a.scatter_bind, particle_groups);
+                    }
+                    a.grid.dispatch(&mut c, &a.grid_bind, node_groups);
+                }
+                None => {
+                    if self.num_particles > 0 {
+                        k.sort.record(&mut c, &k.scan, &bind.sort);
+                        k.ranges
+                            .kernel
+                            .dispatch(&mut c, &bind.ranges, particle_groups);
+                        k.mark_nodes
+                            .dispatch(&mut c, &bind.mark_nodes, particle_groups);
+                    }
+                    k.p2g.dispatch(&mut c, &bind.p2g, node_groups);
+                }
+            }
             if self.num_particles > 0 {
                 k.g2p.dispatch(&mut c, &bind.g2p, particle_groups);
             }
         }
         gpu.queue.submit([enc.finish()]);
         gpu.check()
+    }
+
+    /// The P2G path in use.
+    pub fn path(&self) -> P2gPath {
+        self.path
     }
 
     /// Number of particles.

@@ -1,0 +1,42 @@
+// P2G with float atomics (per particle; SPEC §2 step 1), for adapters with
+// SHADER_FLOAT32_ATOMIC: each particle adds w_ip m_p and w_ip (m_p v_p + affine_p d_ip) to
+// its 27 nodes. Faster than the gather where atomics are native, but the order of the
+// additions — and so the last bits of the sums — varies from run to run; the gather path
+// (p2g.wgsl) is the deterministic one. Mirrors `cpu::p2g`.
+
+@group(0) @binding(0) var<uniform> step: SimStep;
+@group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> affine: array<mat3x3<f32>>;
+// 4 per node: momentum x, y, z, mass; cleared before every step
+@group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<f32>>;
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let p = flat_id(wid, nwg, lid);
+    if p >= step.num_particles {
+        return;
+    }
+    let xm = x_mass[p];
+    let st = grid_stencil(step, xm.xyz);
+    if !st.ok {
+        return;
+    }
+    let s = st.s;
+    let n = step.nodes;
+    let base = vec3<u32>(s.base);
+    let mv = xm.w * v_volume[p].xyz;
+    let a = affine[p];
+    for (var k = 0u; k < 27u; k++) {
+        let off = bspline_stencil_offset(k);
+        let i = base + off;
+        let idx = 4u * (i.x + n.x * (i.y + n.y * i.z));
+        let w = bspline_weight(s, off);
+        let mom = w * (mv + a * bspline_offset(s, off, step.dx));
+        atomicAdd(&grid_sum[idx], mom.x);
+        atomicAdd(&grid_sum[idx + 1u], mom.y);
+        atomicAdd(&grid_sum[idx + 2u], mom.z);
+        atomicAdd(&grid_sum[idx + 3u], w * xm.w);
+    }
+}
