@@ -90,6 +90,10 @@ struct RenderArgs {
     /// Image height in pixels (overrides the scene's).
     #[arg(long)]
     height: Option<u32>,
+    /// Also write each rendered frame's Gaussians (deformed, SH rotated into the world
+    /// frame) as a standard 3DGS PLY: DIR/frame_00000.ply, …
+    #[arg(long, value_name = "DIR")]
+    export_ply: Option<PathBuf>,
     /// Quick look at a 3DGS PLY file without a scene file: an orbit framing its bounds.
     #[arg(long, conflicts_with = "scene")]
     ply: Option<PathBuf>,
@@ -178,6 +182,7 @@ fn run(cli: Cli) -> Result<()> {
 impl RenderArgs {
     fn default_scene() -> RenderArgs {
         RenderArgs {
+            export_ply: None,
             scene: None,
             out: None,
             frames: None,
@@ -371,6 +376,14 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         None => None,
     };
 
+    if let Some(dir) = &args.export_ply {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the PLY export directory {}", dir.display()))?;
+    }
+    let rotator = args
+        .export_ply
+        .as_ref()
+        .map(|_| splatter::splat::sh::ShRotator::new());
     let workers = FrameWriter::default_workers();
     let mut writer = FrameWriter::new(workers, 2 * workers);
     let mut progress = Progress::new(u64::from(frames.end - frames.start), "render");
@@ -392,6 +405,10 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                 continue;
             }
             derive.run(&gpu)?;
+        }
+        if let (Some(dir), Some(rotator)) = (&args.export_ply, &rotator) {
+            let gaussians = renderer.read_gaussians(&gpu)?;
+            splatter::output::export::export_frame(dir, frame, &gaussians, &splats, rotator)?;
         }
         let camera = path.camera(frame);
         let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;

@@ -2,6 +2,7 @@
 //! renamed, so a crash or a full disk never leaves a truncated `frame_*.png`; and the
 //! progress display.
 
+pub mod export;
 mod progress;
 
 pub use progress::Progress;

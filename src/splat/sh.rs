@@ -100,3 +100,169 @@ mod tests {
         }
     }
 }
+
+/// Rotating SH coefficients into the world frame: given coefficients `c` that are evaluated
+/// along the rest-frame direction Rᵀd (as the renderer does with a Gaussian's rest-frame
+/// rotation R), return c' with eval(c', d) = eval(c, Rᵀd) for every d — what a standard
+/// 3DGS viewer, which has no per-Gaussian frame, needs.
+///
+/// Each band l transforms by a (2l+1)² matrix D_l with Y_l(Rᵀd) = D_l Y_l(d), and c'_l =
+/// D_lᵀ c_l. D_l is found numerically: Y_l at K fixed, well-spread directions d_k and at
+/// Rᵀd_k, D_l = [Y_l(Rᵀd_k)] · pinv([Y_l(d_k)]) (exact, since the band is closed under
+/// rotation; the pseudo-inverse is computed once).
+pub struct ShRotator {
+    dirs: Vec<glam::DVec3>,
+    /// Per band l = 1..=3: pinv of the (2l+1) × K matrix [Y_l(d_k)], as K × (2l+1).
+    pinv: [Vec<f64>; 3],
+}
+
+const ROT_DIRS: usize = 16;
+
+fn band_range(l: usize) -> std::ops::Range<usize> {
+    l * l..(l + 1) * (l + 1)
+}
+
+fn basis_f64(d: glam::DVec3) -> [f64; 16] {
+    basis(3, d.as_vec3().normalize()).map(f64::from)
+}
+
+impl Default for ShRotator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ShRotator {
+    pub fn new() -> ShRotator {
+        // A Fibonacci sphere: well spread, deterministic.
+        let dirs: Vec<glam::DVec3> = (0..ROT_DIRS)
+            .map(|k| {
+                let z = 1.0 - (2.0 * k as f64 + 1.0) / ROT_DIRS as f64;
+                let r = (1.0 - z * z).sqrt();
+                let phi = k as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+                glam::DVec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect();
+        let ys: Vec<[f64; 16]> = dirs.iter().map(|d| basis_f64(*d)).collect();
+        let pinv = [1, 2, 3].map(|l| {
+            let r = band_range(l);
+            let n = r.len();
+            // A: n × K. pinv = Aᵀ (A Aᵀ)⁻¹ (K × n).
+            let mut aat = vec![0.0; n * n];
+            for y in &ys {
+                for i in 0..n {
+                    for j in 0..n {
+                        aat[i * n + j] += y[r.start + i] * y[r.start + j];
+                    }
+                }
+            }
+            let inv = invert(&aat, n);
+            let mut p = vec![0.0; ROT_DIRS * n];
+            for (k, y) in ys.iter().enumerate() {
+                for j in 0..n {
+                    p[k * n + j] = (0..n).map(|i| y[r.start + i] * inv[i * n + j]).sum();
+                }
+            }
+            p
+        });
+        ShRotator { dirs, pinv }
+    }
+
+    /// World-frame coefficients of `coeffs` (coefficient-major `[k * 3 + c]`, degree
+    /// `degree`) for a Gaussian whose rest frame is rotated by `r`.
+    pub fn to_world(&self, degree: u32, coeffs: &[f32], r: glam::DQuat) -> Vec<f32> {
+        let mut out = coeffs.to_vec();
+        let rt = r.conjugate();
+        let rotated: Vec<[f64; 16]> = self.dirs.iter().map(|d| basis_f64(rt * *d)).collect();
+        for l in 1..=degree as usize {
+            let range = band_range(l);
+            let n = range.len();
+            // D = [Y_l(Rᵀ d_k)] (n × K) · pinv (K × n).
+            let mut dmat = vec![0.0; n * n];
+            for (k, y) in rotated.iter().enumerate() {
+                for i in 0..n {
+                    for j in 0..n {
+                        dmat[i * n + j] += y[range.start + i] * self.pinv[l - 1][k * n + j];
+                    }
+                }
+            }
+            for c in 0..3 {
+                for j in 0..n {
+                    // c'_j = Σ_i D_ij c_i
+                    let v: f64 = (0..n)
+                        .map(|i| dmat[i * n + j] * f64::from(coeffs[(range.start + i) * 3 + c]))
+                        .sum();
+                    out[(range.start + j) * 3 + c] = v as f32;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Inverse of a small symmetric positive definite n × n matrix (Gauss-Jordan).
+fn invert(a: &[f64], n: usize) -> Vec<f64> {
+    let mut m = a.to_vec();
+    let mut inv: Vec<f64> = (0..n * n)
+        .map(|i| if i / n == i % n { 1.0 } else { 0.0 })
+        .collect();
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|x, y| m[x * n + col].abs().total_cmp(&m[y * n + col].abs()))
+            .unwrap_or(col);
+        for j in 0..n {
+            m.swap(col * n + j, piv * n + j);
+            inv.swap(col * n + j, piv * n + j);
+        }
+        let d = m[col * n + col];
+        for j in 0..n {
+            m[col * n + j] /= d;
+            inv[col * n + j] /= d;
+        }
+        for row in 0..n {
+            if row != col {
+                let f = m[row * n + col];
+                for j in 0..n {
+                    m[row * n + j] -= f * m[col * n + j];
+                    inv[row * n + j] -= f * inv[col * n + j];
+                }
+            }
+        }
+    }
+    inv
+}
+
+#[cfg(test)]
+mod rotation_tests {
+    use super::*;
+    use glam::{DQuat, DVec3};
+
+    #[test]
+    fn rotated_coefficients_evaluate_like_the_rest_frame() {
+        let rot = ShRotator::new();
+        let mut rng = crate::rng::SplitMix64::new(9);
+        for _ in 0..50 {
+            let r = DQuat::from_xyzw(
+                rng.uniform() - 0.5,
+                rng.uniform() - 0.5,
+                rng.uniform() - 0.5,
+                rng.uniform() - 0.5,
+            )
+            .normalize();
+            let c: Vec<f32> = (0..48).map(|_| rng.range(-1.0, 1.0)).collect();
+            let world = rot.to_world(3, &c, r);
+            for _ in 0..20 {
+                let d = DVec3::new(
+                    rng.uniform() - 0.5,
+                    rng.uniform() - 0.5,
+                    rng.uniform() - 0.5,
+                )
+                .normalize();
+                let rest = eval(3, &c, (r.conjugate() * d).as_vec3());
+                let got = eval(3, &world, d.as_vec3());
+                // Compare before the clamp at 0: both are max(0, ·) of equal values.
+                assert!((rest - got).abs().max_element() < 2e-4, "{rest} vs {got}");
+            }
+        }
+    }
+}

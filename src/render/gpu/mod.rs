@@ -194,6 +194,25 @@ impl GpuRenderer {
         self.splats.as_ref().map(|s| &s.gaussians)
     }
 
+    /// Read the Gaussians back as the renderer has them (after any derive pass).
+    pub fn read_gaussians(&self, gpu: &GpuContext) -> Result<Vec<GaussianIn>, GpuError> {
+        let Some(s) = &self.splats else {
+            return Ok(Vec::new());
+        };
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("gaussians readback"),
+            size: s.gaussians.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&s.gaussians, 0, &staging, 0, None);
+        gpu.queue.submit([enc.finish()]);
+        let bytes = read_buffer(gpu, &staging)?;
+        let n = s.count as usize * std::mem::size_of::<GaussianIn>();
+        Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
+    }
+
     /// Upload a set of Gaussians (replacing the previous one).
     pub fn upload(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
         let n = splats.len() as u64;

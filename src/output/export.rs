@@ -1,0 +1,99 @@
+//! `--export-ply`: the Gaussians of a frame, as the renderer draws them, written as a
+//! standard 3DGS PLY so that any splat viewer can play a simulation. Each covariance is
+//! folded back into scale and rotation (its eigen-decomposition), and SH coefficients are
+//! rotated from the Gaussian's rest frame into the world frame (viewers have no
+//! per-Gaussian frame).
+
+use std::path::{Path, PathBuf};
+
+use glam::{DMat3, DQuat, Vec3};
+use rayon::prelude::*;
+
+use crate::render::gpu::layout::GaussianIn;
+use crate::render::splats::mat3_from_sym3;
+use crate::render::Splats;
+use crate::sim::svd::symmetric_eigen;
+use crate::splat::ply::{write_ply, PlyError, PlyFormat};
+use crate::splat::sh::ShRotator;
+use crate::splat::GaussianCloud;
+
+/// `DIR/frame_00042.ply`.
+pub fn frame_ply_path(dir: &Path, frame: u32) -> PathBuf {
+    dir.join(format!("frame_{frame:05}.ply"))
+}
+
+/// The cloud a viewer should see for `gaussians` (renderer records), with the SH of `splats`
+/// (same order; SH do not change over a simulation).
+pub fn world_cloud(
+    gaussians: &[GaussianIn],
+    splats: &Splats,
+    rotator: &ShRotator,
+) -> GaussianCloud {
+    let stride = splats.sh_stride();
+    let parts: Vec<(Vec3, Vec3, glam::Quat, f32, Vec<f32>)> = gaussians
+        .par_iter()
+        .enumerate()
+        .map(|(i, g)| {
+            let cov = mat3_from_sym3([
+                g.cov_a[0], g.cov_a[1], g.cov_a[2], g.cov_a[3], g.cov_b[0], g.cov_b[1],
+            ]);
+            let (lambda, v) = symmetric_eigen(cov.as_dmat3());
+            let scale = lambda
+                .max(glam::DVec3::splat(1e-24))
+                .to_array()
+                .map(f64::sqrt);
+            let rotation = DQuat::from_mat3(&DMat3::from_cols(v.x_axis, v.y_axis, v.z_axis))
+                .normalize()
+                .as_quat();
+            let frame = DQuat::from_xyzw(
+                g.rotation[0].into(),
+                g.rotation[1].into(),
+                g.rotation[2].into(),
+                g.rotation[3].into(),
+            )
+            .normalize();
+            let sh = rotator.to_world(
+                splats.sh_degree,
+                &splats.sh[i * stride..(i + 1) * stride],
+                frame,
+            );
+            let mean = Vec3::new(g.mean_opacity[0], g.mean_opacity[1], g.mean_opacity[2]);
+            (
+                mean,
+                glam::DVec3::from_array(scale).as_vec3(),
+                rotation,
+                g.mean_opacity[3],
+                sh,
+            )
+        })
+        .collect();
+    let mut cloud = GaussianCloud {
+        sh_degree: splats.sh_degree,
+        ..Default::default()
+    };
+    for (mean, scale, rotation, opacity, sh) in parts {
+        cloud.positions.push(mean);
+        cloud.scales.push(scale);
+        cloud.rotations.push(rotation);
+        cloud.opacities.push(opacity);
+        cloud.sh.extend(sh);
+    }
+    cloud
+}
+
+/// Write frame `frame`'s Gaussians to `DIR/frame_NNNNN.ply` (binary, atomically).
+pub fn export_frame(
+    dir: &Path,
+    frame: u32,
+    gaussians: &[GaussianIn],
+    splats: &Splats,
+    rotator: &ShRotator,
+) -> Result<PathBuf, PlyError> {
+    let path = frame_ply_path(dir, frame);
+    write_ply(
+        &path,
+        &world_cloud(gaussians, splats, rotator),
+        PlyFormat::BinaryLittleEndian,
+    )?;
+    Ok(path)
+}
