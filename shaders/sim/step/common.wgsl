@@ -62,9 +62,14 @@ struct SimStep {
     materials: array<SimMaterial, MAX_MATERIALS>,
 }
 
+// Every step pass binds the step's constants here. Helpers below read this global rather
+// than taking the struct as a parameter: the struct is over a kilobyte, and CPU drivers
+// (lavapipe) copy by-value arguments.
+@group(0) @binding(0) var<uniform> step: SimStep;
+
 // Key of a particle whose stencil is off the grid: one past the last base cell, so those
 // particles sort last and fall into the extra slot of the cell ranges.
-fn no_cell_key(step: SimStep) -> u32 {
+fn no_cell_key() -> u32 {
     let bc = step.cells - 1u;
     return bc.x * bc.y * bc.z;
 }
@@ -75,7 +80,7 @@ struct GridStencil {
     s: BsplineStencil,
 }
 
-fn grid_stencil(step: SimStep, x: vec3<f32>) -> GridStencil {
+fn grid_stencil(x: vec3<f32>) -> GridStencil {
     var out: GridStencil;
     out.ok = false;
     if !sim_is_finite3(x) {

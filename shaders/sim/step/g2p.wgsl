@@ -2,7 +2,6 @@
 // F ← (I + Δt C) F, x += Δt v_p, then the material's plasticity (NACC return mapping,
 // SPEC §4). A particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 @group(0) @binding(1) var<storage, read_write> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> deformation: array<mat3x3<f32>>;
@@ -23,7 +22,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     let xm = x_mass[p];
     let vv = v_volume[p];
-    let st = grid_stencil(step, xm.xyz);
+    let st = grid_stencil(xm.xyz);
     if !st.ok {
         if sim_is_finite3(xm.xyz) {
             atomicAdd(&flags[1], 1u);

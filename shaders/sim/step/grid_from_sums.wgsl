@@ -1,7 +1,6 @@
 // The grid update after the atomic P2G (per node): velocity, gravity, colliders and walls
 // from the scattered sums (grid_update.wgsl's node_velocity, as in the gather path).
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 // momentum xyz, mass w (written by p2g_scatter.wgsl)
 @group(0) @binding(1) var<storage, read> grid_sum: array<vec4<f32>>;
 // velocity xyz, mass w
@@ -17,5 +16,5 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     let pm = grid_sum[idx];
     let i = vec3<u32>(idx % n.x, (idx / n.x) % n.y, idx / (n.x * n.y));
-    grid[idx] = vec4<f32>(node_velocity(step, i, pm.xyz, pm.w), pm.w);
+    grid[idx] = vec4<f32>(node_velocity(i, pm.xyz, pm.w), pm.w);
 }

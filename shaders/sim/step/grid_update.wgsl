@@ -25,7 +25,7 @@ fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
 }
 
 // Velocity of node i from its momentum and mass (0 where there is no mass).
-fn node_velocity(step: SimStep, i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
+fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
         return vec3<f32>(0.0);
     }

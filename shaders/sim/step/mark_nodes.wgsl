@@ -3,7 +3,6 @@
 // one load instead of visiting 27 empty cells — most of a grid is empty, and "grids cover
 // only what moves" still leaves air around the objects.
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 @group(0) @binding(1) var<storage, read> cell_keys: array<u32>;
 @group(0) @binding(2) var<storage, read_write> node_active: array<u32>;
 
@@ -15,7 +14,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     let key = cell_keys[i];
-    if key == no_cell_key(step) || (i > 0u && cell_keys[i - 1u] == key) {
+    if key == no_cell_key() || (i > 0u && cell_keys[i - 1u] == key) {
         return;
     }
     let bc = step.cells - 1u;

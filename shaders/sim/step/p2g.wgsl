@@ -5,7 +5,6 @@
 // a fixed order and the result is the same on every run and every backend. Mirrors
 // `cpu::p2g` followed by `cpu::grid_update`.
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> cell_values: array<u32>;
 @group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
@@ -54,5 +53,5 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             }
         }
     }
-    grid[idx] = vec4<f32>(node_velocity(step, vec3<u32>(node), psum, msum), msum);
+    grid[idx] = vec4<f32>(node_velocity(vec3<u32>(node), psum, msum), msum);
 }

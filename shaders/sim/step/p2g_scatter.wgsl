@@ -4,7 +4,6 @@
 // additions — and so the last bits of the sums — varies from run to run; the gather path
 // (p2g.wgsl) is the deterministic one. Mirrors `cpu::p2g`.
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> affine: array<mat3x3<f32>>;
@@ -19,7 +18,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     let xm = x_mass[p];
-    let st = grid_stencil(step, xm.xyz);
+    let st = grid_stencil(xm.xyz);
     if !st.ok {
         return;
     }

@@ -2,7 +2,6 @@
 // momentum term affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (SPEC §2 step 1), computed once
 // here rather than 27 times in the gather. Mirrors the item building in `cpu::p2g`.
 
-@group(0) @binding(0) var<uniform> step: SimStep;
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> deformation: array<mat3x3<f32>>;
@@ -29,9 +28,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     cell_values[p] = p;
     let xm = x_mass[p];
-    let st = grid_stencil(step, xm.xyz);
+    let st = grid_stencil(xm.xyz);
     if !st.ok {
-        cell_keys[p] = no_cell_key(step);
+        cell_keys[p] = no_cell_key();
         return;
     }
     let bc = step.cells - 1u;
