@@ -221,7 +221,6 @@ struct AtomicPasses {
     grid: Kernel,
     scatter_bind: wgpu::BindGroup,
     grid_bind: wgpu::BindGroup,
-    sums: wgpu::Buffer,
 }
 
 struct Kernels {
@@ -493,7 +492,6 @@ impl GpuSim {
         };
         let atomic = (path == P2gPath::Atomic).then(|| {
             let b = &buffers;
-            let sums = zeroed(gpu, "sim grid sums", u64::from(nodes) * 16);
             let scatter = Kernel::new(
                 device,
                 "sim p2g_scatter",
@@ -507,12 +505,13 @@ impl GpuSim {
                 "main",
             );
             AtomicPasses {
-                scatter_bind: scatter
-                    .bind(device, &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &sums]),
-                grid_bind: grid.bind(device, &[&b.step, &sums, &b.grid]),
+                scatter_bind: scatter.bind(
+                    device,
+                    &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &b.grid],
+                ),
+                grid_bind: grid.bind(device, &[&b.step, &b.grid]),
                 scatter,
                 grid,
-                sums,
             }
         });
         Ok(GpuSim {
@@ -538,7 +537,7 @@ impl GpuSim {
             });
         for _ in 0..steps {
             match &self.atomic {
-                Some(a) => enc.clear_buffer(&a.sums, 0, None),
+                Some(_) => enc.clear_buffer(&b.grid, 0, None),
                 None => {
                     enc.clear_buffer(&b.ranges, 0, None);
                     enc.clear_buffer(&b.node_active, 0, None);

@@ -7,7 +7,8 @@
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> affine: array<mat3x3<f32>>;
-// 4 per node: momentum x, y, z, mass; cleared before every step
+// The grid, 4 floats per node: momentum x, y, z, mass; cleared before every step and turned
+// into velocities in place by grid_from_sums.wgsl
 @group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<f32>>;
 
 @compute @workgroup_size(256)
