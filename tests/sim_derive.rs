@@ -40,6 +40,47 @@ fn particles_for(splats: &Splats, offset: usize, density: f64, volume: f64) -> P
     p
 }
 
+/// Give every particle a random deformation (rotation times I + `amount`·random, det > 0),
+/// upload them to a simulation and `splats` to a renderer, and run the derive pass for the
+/// Gaussians from `offset` on: the shared setup of the derive tests.
+fn deform_and_derive(
+    gpu: &GpuContext,
+    splats: &Splats,
+    particles: &mut Particles,
+    offset: usize,
+    amount: f64,
+    r: &mut impl FnMut() -> f32,
+) -> GpuRenderer {
+    for f in &mut particles.f {
+        *f =
+            DMat3::from_quat(DQuat::from_xyzw(r().into(), r().into(), r().into(), 1.0).normalize())
+                * (DMat3::IDENTITY
+                    + DMat3::from_cols_array(&[0.0; 9].map(|_| amount * f64::from(r()))));
+    }
+    let grid = Grid::new(DVec3::ZERO, DVec3::ONE, 1.0 / 16.0);
+    let params = StepParams {
+        dt: 1e-4,
+        gravity: DVec3::ZERO,
+        boundaries: Boundaries::default(),
+        transfer: Transfer::Apic,
+    };
+    let sim = GpuSim::new(
+        gpu,
+        particles,
+        &grid,
+        &[Material::fixed_corotated(1e3, 0.3)],
+        &params,
+    )
+    .unwrap();
+    let mut renderer = GpuRenderer::new(gpu);
+    renderer.upload(gpu, splats).unwrap();
+    Derive::new(gpu, &sim, &renderer, splats, offset as u32)
+        .unwrap()
+        .run(gpu)
+        .unwrap();
+    renderer
+}
+
 #[test]
 fn derive_matches_its_f64_twin() {
     for gpu in splatter::gpu::test_contexts() {
@@ -66,32 +107,7 @@ fn derive_matches_its_f64_twin() {
             splats.sh.extend([r(), r(), r()]);
         }
         let mut particles = particles_for(&splats, offset, 1000.0, 1e-6);
-        for f in &mut particles.f {
-            // Stretch, shear and rotation, det > 0.
-            *f = DMat3::from_quat(
-                DQuat::from_xyzw(r().into(), r().into(), r().into(), 1.0).normalize(),
-            ) * (DMat3::IDENTITY
-                + DMat3::from_cols_array(&[0.0; 9].map(|_| 0.3 * f64::from(r()))));
-        }
-        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, 1.0 / 16.0);
-        let params = StepParams {
-            dt: 1e-4,
-            gravity: DVec3::ZERO,
-            boundaries: Boundaries::default(),
-            transfer: Transfer::Apic,
-        };
-        let sim = GpuSim::new(
-            &gpu,
-            &particles,
-            &grid,
-            &[Material::fixed_corotated(1e3, 0.3)],
-            &params,
-        )
-        .unwrap();
-        let mut renderer = GpuRenderer::new(&gpu);
-        renderer.upload(&gpu, &splats).unwrap();
-        let derive = Derive::new(&gpu, &sim, &renderer, &splats, offset as u32).unwrap();
-        derive.run(&gpu).unwrap();
+        let renderer = deform_and_derive(&gpu, &splats, &mut particles, offset, 0.3, &mut r);
         let out = read_gaussians(&gpu, &renderer, n);
         let (mut cov_err, mut rot_err) = (0.0f64, 0.0f64);
         for (p, g) in out.iter().enumerate().skip(offset) {
@@ -271,33 +287,7 @@ fn exported_ply_renders_like_the_deformed_state() {
         }
     }
     let mut particles = particles_for(&splats, 0, 1000.0, 1e-6);
-    for f in &mut particles.f {
-        *f =
-            DMat3::from_quat(DQuat::from_xyzw(r().into(), r().into(), r().into(), 1.0).normalize())
-                * (DMat3::IDENTITY
-                    + DMat3::from_cols_array(&[0.0; 9].map(|_| 0.25 * f64::from(r()))));
-    }
-    let grid = Grid::new(DVec3::ZERO, DVec3::ONE, 1.0 / 16.0);
-    let params = StepParams {
-        dt: 1e-4,
-        gravity: DVec3::ZERO,
-        boundaries: Boundaries::default(),
-        transfer: Transfer::Apic,
-    };
-    let sim = GpuSim::new(
-        &gpu,
-        &particles,
-        &grid,
-        &[Material::fixed_corotated(1e3, 0.3)],
-        &params,
-    )
-    .unwrap();
-    let mut renderer = GpuRenderer::new(&gpu);
-    renderer.upload(&gpu, &splats).unwrap();
-    Derive::new(&gpu, &sim, &renderer, &splats, 0)
-        .unwrap()
-        .run(&gpu)
-        .unwrap();
+    let mut renderer = deform_and_derive(&gpu, &splats, &mut particles, 0, 0.25, &mut r);
     let cam = Camera::look_at(
         Vec3::new(1.6, -0.9, 1.1),
         Vec3::splat(0.5),

@@ -10,56 +10,8 @@ use splatter::sim::nacc::{
 };
 use splatter::sim::svd::svd3;
 
-/// The paper's fruit material (SPEC §9: kiwi/dragonfruit-like, β = 1).
-fn fruit() -> NaccParams {
-    NaccParams {
-        e: 2000.0,
-        nu: 0.38,
-        alpha0: -0.04,
-        beta: 1.0,
-        xi: 2.0,
-        m_slope: 2.36,
-    }
-}
-
-/// A spread of the paper's materials (watermelon rind/flesh/seeds, jelly, sandcastle).
-fn materials() -> Vec<NaccParams> {
-    let base = fruit();
-    vec![
-        base,
-        NaccParams { beta: 2.0, ..base },
-        NaccParams {
-            e: 1000.0,
-            beta: 0.6,
-            ..base
-        },
-        NaccParams {
-            e: 1e4,
-            beta: 5.0,
-            ..base
-        },
-        NaccParams {
-            nu: 0.45,
-            alpha0: -0.5,
-            ..base
-        },
-        NaccParams {
-            e: 50.0,
-            nu: 0.05,
-            beta: 0.01,
-            xi: 1.0,
-            ..base
-        },
-    ]
-}
-
-const VARIANTS: [Case3Variant; 5] = [
-    Case3Variant::Center,
-    Case3Variant::Continuous { k: 1.0 },
-    Case3Variant::Continuous { k: 2.0 },
-    Case3Variant::Continuous { k: 8.0 },
-    Case3Variant::ClosestPoint,
-];
+mod common;
+use common::{fruit, paper_materials as materials, VARIANTS};
 
 fn random_rotation(r: &mut SplitMix64) -> DMat3 {
     let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;

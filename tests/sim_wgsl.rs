@@ -603,51 +603,8 @@ fn bspline_weights_match_the_oracle() {
 // ---------------------------------------------------------------------------------------
 // NACC return mapping
 
-/// The paper's fruit material and a spread of the others (as `tests/sim_math.rs`).
-fn nacc_materials() -> Vec<NaccParams> {
-    let base = NaccParams {
-        e: 2000.0,
-        nu: 0.38,
-        alpha0: -0.04,
-        beta: 1.0,
-        xi: 2.0,
-        m_slope: 2.36,
-    };
-    vec![
-        base,
-        NaccParams { beta: 2.0, ..base },
-        NaccParams {
-            e: 1000.0,
-            beta: 0.6,
-            ..base
-        },
-        NaccParams {
-            e: 1e4,
-            beta: 5.0,
-            ..base
-        },
-        NaccParams {
-            nu: 0.45,
-            alpha0: -0.5,
-            ..base
-        },
-        NaccParams {
-            e: 50.0,
-            nu: 0.05,
-            beta: 0.01,
-            xi: 1.0,
-            ..base
-        },
-    ]
-}
-
-const VARIANTS: [Case3Variant; 5] = [
-    Case3Variant::Center,
-    Case3Variant::Continuous { k: 1.0 },
-    Case3Variant::Continuous { k: 2.0 },
-    Case3Variant::Continuous { k: 8.0 },
-    Case3Variant::ClosestPoint,
-];
+mod common;
+use common::{paper_materials as nacc_materials, VARIANTS};
 
 fn variant_name(v: Case3Variant) -> String {
     match v {

@@ -223,6 +223,11 @@ struct AtomicPasses {
     grid_bind: wgpu::BindGroup,
 }
 
+/// A step pass: its WGSL after the shared modules, entry point `main`.
+fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
+    Kernel::new(device, label, &source(pass), "main")
+}
+
 struct Kernels {
     prepare: Kernel,
     mark_nodes: Kernel,
@@ -347,29 +352,25 @@ impl GpuSim {
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
         let kernels = Kernels {
-            prepare: Kernel::new(
+            prepare: step_kernel(
                 device,
                 "sim prepare",
-                &source(include_str!("../../shaders/sim/step/prepare.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/prepare.wgsl"),
             ),
-            mark_nodes: Kernel::new(
+            mark_nodes: step_kernel(
                 device,
                 "sim mark_nodes",
-                &source(include_str!("../../shaders/sim/step/mark_nodes.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/mark_nodes.wgsl"),
             ),
-            p2g: Kernel::new(
+            p2g: step_kernel(
                 device,
                 "sim p2g",
-                &source(include_str!("../../shaders/sim/step/p2g.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/p2g.wgsl"),
             ),
-            g2p: Kernel::new(
+            g2p: step_kernel(
                 device,
                 "sim g2p",
-                &source(include_str!("../../shaders/sim/step/g2p.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/g2p.wgsl"),
             ),
             ranges: TileRanges::new(device),
             sort: RadixSort::new(device),
@@ -492,17 +493,15 @@ impl GpuSim {
         };
         let atomic = (path == P2gPath::Atomic).then(|| {
             let b = &buffers;
-            let scatter = Kernel::new(
+            let scatter = step_kernel(
                 device,
                 "sim p2g_scatter",
-                &source(include_str!("../../shaders/sim/step/p2g_scatter.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/p2g_scatter.wgsl"),
             );
-            let grid = Kernel::new(
+            let grid = step_kernel(
                 device,
                 "sim grid_from_sums",
-                &source(include_str!("../../shaders/sim/step/grid_from_sums.wgsl")),
-                "main",
+                include_str!("../../shaders/sim/step/grid_from_sums.wgsl"),
             );
             AtomicPasses {
                 scatter_bind: scatter.bind(
