@@ -147,8 +147,15 @@ pub fn render_bench(
 
 /// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step with a NACC
 /// material (the paper's fruit parameters), for 20k particles on a 64³ grid and (unless
-/// `quick`) 1M particles on a 128³ grid; plus GPU memory per particle.
-pub fn sim_bench(gpu: &GpuContext, steps: u32, quick: bool, out: &mut dyn Write) -> Result<()> {
+/// `quick`) 1M particles on a 128³ grid; plus GPU memory per particle. With `per_pass`, each
+/// case is also broken down by pass.
+pub fn sim_bench(
+    gpu: &GpuContext,
+    steps: u32,
+    quick: bool,
+    per_pass: bool,
+    out: &mut dyn Write,
+) -> Result<()> {
     use crate::sim::cpu::{
         cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
     };
@@ -219,6 +226,26 @@ pub fn sim_bench(gpu: &GpuContext, steps: u32, quick: bool, out: &mut dyn Write)
                 secs * 1e9 / (f64::from(steps) * np),
                 sim.gpu_bytes() as f64 / np
             )?;
+            if per_pass {
+                let active = sim.active_blocks(gpu)?.len();
+                let blocks = sim.blocks();
+                writeln!(
+                    out,
+                    "{:>22} active blocks of 4³ nodes: {active} of {blocks}",
+                    ""
+                )?;
+                let list: Vec<String> = sim
+                    .profile_passes(gpu, steps)?
+                    .iter()
+                    .map(|(name, ms)| format!("{name} {ms:.2}"))
+                    .collect();
+                writeln!(
+                    out,
+                    "{:>22} per pass (ms per step, each waited for): {}",
+                    "",
+                    list.join(", ")
+                )?;
+            }
             out.flush()?;
         }
     }

@@ -59,6 +59,9 @@ enum BenchWhat {
         /// Only the 20k case.
         #[arg(long)]
         quick: bool,
+        /// Also break each case down by pass (each pass run alone and waited for).
+        #[arg(long)]
+        per_pass: bool,
     },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.
     Render {
@@ -154,10 +157,15 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Some(Command::Bench {
-            what: BenchWhat::Sim { steps, quick },
+            what:
+                BenchWhat::Sim {
+                    steps,
+                    quick,
+                    per_pass,
+                },
         }) => {
             let gpu = GpuContext::new(cli.backend)?;
-            splatter::bench::sim_bench(&gpu, steps.max(1), quick, &mut std::io::stdout())
+            splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, &mut std::io::stdout())
         }
         Some(Command::Bench {
             what:
@@ -198,7 +206,17 @@ impl RenderArgs {
 /// The watchdog's stop message: frame, what was counted, the likely cause. Frames
 /// already written are complete (each was renamed into place).
 fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
-    let steps = format!("in the {} steps before frame {frame}", s.steps_per_frame);
+    let n = s.steps_per_frame;
+    let steps = match w.first_step {
+        // Frame f shows the state after f·n steps: the batch read before it ran steps
+        // (f − 1)·n + 1 ..= f·n, counted from 1.
+        Some(k) => format!(
+            "in the {n} steps before frame {frame}, first at step {} (substep {} of {n})",
+            u64::from(frame.saturating_sub(1)) * u64::from(n) + u64::from(k) + 1,
+            k + 1
+        ),
+        None => format!("in the {n} steps before frame {frame}"),
+    };
     if w.nonfinite > 0 {
         format!(
             "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}); likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",

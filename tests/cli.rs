@@ -835,7 +835,10 @@ fn watchdog_stops_an_unstable_simulation() {
         describe(&out)
     );
     let line = expect_late_error(&out);
-    assert_mentions(&line, &["simulation stopped", "before frame", "Δt"]);
+    assert_mentions(
+        &line,
+        &["simulation stopped", "before frame", "first at step", "Δt"],
+    );
     for name in list(&dir.path().join("frames")) {
         assert!(
             name.starts_with("frame_") && name.ends_with(".png"),

@@ -248,3 +248,108 @@ fn gpu_nacc_step_matches_the_cpu_reference() {
         }
     }
 }
+
+/// The node passes visit only the blocks of 4³ nodes that some particle's stencil reaches:
+/// the GPU's list after a step holds exactly the blocks counted here on the CPU from the
+/// particles' stencils at the start of that step, including blocks that stick out of a
+/// grid whose node count is not a multiple of 4.
+#[test]
+fn gpu_active_blocks_are_the_blocks_the_stencils_reach() {
+    for gpu in gpus() {
+        let dx = 1.0 / 32.0; // 33 nodes per axis: 9 blocks, the last one mostly outside
+        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+        let mut p = Particles::sample_box(
+            DVec3::new(0.2, 0.3, 0.25),
+            DVec3::new(0.35, 0.4, 0.5),
+            dx / 2.0,
+            1000.0,
+        );
+        // A second cluster against the far corner, in the partial blocks.
+        p.append(&Particles::sample_box(
+            DVec3::splat(0.9),
+            DVec3::splat(0.95),
+            dx / 2.0,
+            1000.0,
+        ));
+        let nodes = grid.nodes();
+        let per_axis = (nodes + 3) / 4;
+        let mut want = std::collections::BTreeSet::new();
+        for x in &p.x {
+            let base = grid.stencil(*x).expect("inside the grid").base.as_uvec3();
+            let (lo, hi) = (base / 4, (base + 2) / 4);
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        want.insert(x + per_axis.x * (y + per_axis.y * z));
+                    }
+                }
+            }
+        }
+        let sp = params(1e-4, Boundaries::default());
+        for path in paths(&gpu) {
+            let sim = GpuSim::with_path(
+                &gpu,
+                &p,
+                &grid,
+                &[Material::fixed_corotated(1e4, 0.3)],
+                &sp,
+                path,
+            )
+            .unwrap();
+            sim.step(&gpu, 1).unwrap();
+            let active = sim.active_blocks(&gpu).unwrap();
+            eprintln!(
+                "{} ({path:?} P2G): {} active blocks of {}",
+                gpu.describe(),
+                active.len(),
+                sim.blocks()
+            );
+            assert_eq!(sim.blocks(), per_axis.element_product());
+            assert_eq!(active, want.iter().copied().collect::<Vec<u32>>());
+        }
+    }
+}
+
+/// The watchdog counts a particle that turns non-finite or leaves the grid once per step,
+/// names the first step that counted since the last read, and starts over after a read.
+#[test]
+fn gpu_watchdog_counts_and_names_the_first_step() {
+    for gpu in gpus() {
+        let dx = 1.0 / 16.0;
+        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+        let mut p = Particles::sample_box(DVec3::splat(0.4), DVec3::splat(0.6), dx / 2.0, 1000.0);
+        let sp = params(1e-4, Boundaries::default());
+        let material = [Material::fixed_corotated(1e4, 0.3)];
+        for path in paths(&gpu) {
+            let sim = GpuSim::with_path(&gpu, &p, &grid, &material, &sp, path).unwrap();
+            sim.step(&gpu, 4).unwrap();
+            let quiet = sim.take_watchdog(&gpu).unwrap();
+            assert_eq!(
+                (quiet.nonfinite, quiet.escaped, quiet.first_step),
+                (0, 0, None)
+            );
+        }
+        // A lone particle thrown at 1000 m/s leaves the grid in step 0 (it is still inside
+        // during that step) and is counted from step 1 on: 4 of 5 steps, first step 1. After
+        // a read, the count and the first step start over.
+        let n = p.len();
+        p.append(&Particles::sample_box(
+            DVec3::splat(0.75),
+            DVec3::splat(0.75 + dx / 4.0),
+            dx / 2.0,
+            1000.0,
+        ));
+        assert_eq!(p.len(), n + 1, "test setup: one lone particle");
+        p.v[n] = DVec3::new(1000.0, 0.0, 0.0);
+        let sp = params(1e-3, Boundaries::default());
+        for path in paths(&gpu) {
+            let sim = GpuSim::with_path(&gpu, &p, &grid, &material, &sp, path).unwrap();
+            sim.step(&gpu, 5).unwrap();
+            let w = sim.take_watchdog(&gpu).unwrap();
+            assert_eq!((w.escaped, w.first_step), (4, Some(1)), "{path:?}");
+            sim.step(&gpu, 2).unwrap();
+            let w = sim.take_watchdog(&gpu).unwrap();
+            assert_eq!((w.escaped, w.first_step), (2, Some(0)), "{path:?}");
+        }
+    }
+}

@@ -87,6 +87,20 @@ impl Kernel {
         cpass.set_bind_group(0, bind, &[]);
         cpass.dispatch_workgroups(x, y, 1);
     }
+
+    /// Record a dispatch whose workgroup counts the GPU wrote into `args` at `offset`
+    /// (three u32: x, y, z; the buffer needs `BufferUsages::INDIRECT`).
+    pub fn dispatch_indirect(
+        &self,
+        cpass: &mut wgpu::ComputePass,
+        bind: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        cpass.set_pipeline(&self.pipeline);
+        cpass.set_bind_group(0, bind, &[]);
+        cpass.dispatch_workgroups_indirect(args, offset);
+    }
 }
 
 /// Split `groups` workgroups into an (x, y) grid with x ≤ 65535 (the portable limit per

@@ -5,12 +5,17 @@
 //! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
 //! 3. `shaders/render/tile_ranges.wgsl` — each cell's run of particles (the renderer's
 //!    tile-range pass: the same job on other keys);
-//! 4. `shaders/sim/step/mark_nodes.wgsl` — nodes that an occupied cell's stencils reach;
-//! 5. `shaders/sim/step/p2g.wgsl` — per active node: gather mass and momentum from the 27
+//! 4. `shaders/sim/step/mark_blocks.wgsl` — blocks of 4³ nodes that an occupied cell's
+//!    stencils reach, listed by `compact_blocks.wgsl` (the node passes run only there);
+//! 5. `shaders/sim/step/p2g.wgsl` — per node of the active blocks: gather mass and momentum from the 27
 //!    cells whose stencils reach it (no atomics: deterministic, and runs on GL too), then
 //!    the grid update in the same thread (`grid_update.wgsl`: velocity, gravity, colliders,
 //!    walls);
 //! 6. `shaders/sim/step/g2p.wgsl` — velocities, C, F, positions, NACC plasticity.
+//!
+//! Where the adapter has float atomics, steps 2–5 are instead `p2g_scatter.wgsl` (each
+//! particle adds to its 27 nodes and flags their blocks), `compact_blocks.wgsl` and
+//! `grid_from_sums.wgsl` (the grid update on the active blocks).
 //!
 //! Every substep of a call to [`GpuSim::step`] goes into one command buffer with nothing
 //! read back in between. The per-particle math is `shaders/sim/*.wgsl`, tested against the
@@ -31,6 +36,8 @@ use crate::render::gpu::scan::Scan;
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
+/// Nodes per axis of an active block (`BLOCK` in `shaders/sim/step/common.wgsl`).
+const BLOCK: u32 = 4;
 
 /// `SimMaterial` of `shaders/sim/step/common.wgsl`.
 #[repr(C)]
@@ -179,6 +186,8 @@ impl GpuStep {
 pub struct Watchdog {
     pub nonfinite: u32,
     pub escaped: u32,
+    /// The first of those steps in which a particle was counted, 0-based from the last read.
+    pub first_step: Option<u32>,
 }
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
@@ -230,7 +239,8 @@ fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel
 
 struct Kernels {
     prepare: Kernel,
-    mark_nodes: Kernel,
+    mark_blocks: Kernel,
+    compact_blocks: Kernel,
     p2g: Kernel,
     g2p: Kernel,
     ranges: TileRanges,
@@ -254,17 +264,52 @@ struct Buffers {
     affine: wgpu::Buffer,
     ranges: wgpu::Buffer,
     grid: wgpu::Buffer,
-    node_active: wgpu::Buffer,
+    block_flags: wgpu::Buffer,
+    active_blocks: wgpu::Buffer,
+    block_args: wgpu::Buffer,
     flags: wgpu::Buffer,
 }
 
 struct Binds {
     prepare: wgpu::BindGroup,
-    mark_nodes: wgpu::BindGroup,
+    mark_blocks: wgpu::BindGroup,
+    compact_blocks: wgpu::BindGroup,
     sort: SortPlan,
     ranges: wgpu::BindGroup,
     p2g: wgpu::BindGroup,
     g2p: wgpu::BindGroup,
+}
+
+/// One pass of the step, for recording and per-pass timing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum StepPass {
+    Clear,
+    Prepare,
+    Scatter,
+    GridFromSums,
+    Sort,
+    Ranges,
+    MarkBlocks,
+    CompactBlocks,
+    Gather,
+    G2p,
+}
+
+impl StepPass {
+    fn name(self) -> &'static str {
+        match self {
+            StepPass::Clear => "clear",
+            StepPass::Prepare => "prepare",
+            StepPass::Scatter => "p2g scatter",
+            StepPass::GridFromSums => "grid from sums",
+            StepPass::Sort => "sort",
+            StepPass::Ranges => "cell ranges",
+            StepPass::MarkBlocks => "mark blocks",
+            StepPass::CompactBlocks => "compact blocks",
+            StepPass::Gather => "p2g gather + grid",
+            StepPass::G2p => "g2p",
+        }
+    }
 }
 
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
@@ -275,7 +320,7 @@ pub struct GpuSim {
     buffers: Buffers,
     binds: Binds,
     num_particles: u32,
-    num_nodes: u32,
+    num_blocks: u32,
 }
 
 fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
@@ -357,10 +402,15 @@ impl GpuSim {
                 "sim prepare",
                 include_str!("../../shaders/sim/step/prepare.wgsl"),
             ),
-            mark_nodes: step_kernel(
+            mark_blocks: step_kernel(
                 device,
-                "sim mark_nodes",
-                include_str!("../../shaders/sim/step/mark_nodes.wgsl"),
+                "sim mark_blocks",
+                include_str!("../../shaders/sim/step/mark_blocks.wgsl"),
+            ),
+            compact_blocks: step_kernel(
+                device,
+                "sim compact_blocks",
+                include_str!("../../shaders/sim/step/compact_blocks.wgsl"),
             ),
             p2g: step_kernel(
                 device,
@@ -397,12 +447,13 @@ impl GpuSim {
         let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
         let base_cells = (grid.cells - 1).element_product();
         let nodes = grid.nodes().element_product();
+        let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
         let nn = u64::from(n);
         let buffers = Buffers {
             step: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sim step"),
                 contents: bytemuck::bytes_of(&step),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             }),
             x_mass: init(gpu, "sim x_mass", &x_mass, true),
             v_volume: init(gpu, "sim v_volume", &v_volume, true),
@@ -418,7 +469,17 @@ impl GpuSim {
             affine: zeroed(gpu, "sim affine", nn * 48),
             ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
             grid: zeroed(gpu, "sim grid", u64::from(nodes) * 16),
-            node_active: zeroed(gpu, "sim active nodes", u64::from(nodes) * 4),
+            block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
+            active_blocks: zeroed(gpu, "sim active blocks", u64::from(blocks) * 4),
+            block_args: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("sim block dispatch"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
             flags: zeroed(gpu, "sim watchdog flags", 16),
         };
         let b = &buffers;
@@ -459,9 +520,19 @@ impl GpuSim {
                 .ranges
                 .kernel
                 .bind(device, &[&b.key_count, sorted_keys, &b.ranges]),
-            mark_nodes: kernels
-                .mark_nodes
-                .bind(device, &[&b.step, sorted_keys, &b.node_active]),
+            mark_blocks: kernels
+                .mark_blocks
+                .bind(device, &[&b.step, sorted_keys, &b.block_flags]),
+            compact_blocks: kernels.compact_blocks.bind(
+                device,
+                &[
+                    &b.step,
+                    &b.block_flags,
+                    &b.active_blocks,
+                    &b.block_args,
+                    &b.flags,
+                ],
+            ),
             p2g: kernels.p2g.bind(
                 device,
                 &[
@@ -472,7 +543,8 @@ impl GpuSim {
                     &b.v_volume,
                     &b.affine,
                     &b.grid,
-                    &b.node_active,
+                    &b.active_blocks,
+                    &b.block_args,
                 ],
             ),
             g2p: kernels.g2p.bind(
@@ -506,9 +578,16 @@ impl GpuSim {
             AtomicPasses {
                 scatter_bind: scatter.bind(
                     device,
-                    &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &b.grid],
+                    &[
+                        &b.step,
+                        &b.x_mass,
+                        &b.v_volume,
+                        &b.affine,
+                        &b.grid,
+                        &b.block_flags,
+                    ],
                 ),
-                grid_bind: grid.bind(device, &[&b.step, &b.grid]),
+                grid_bind: grid.bind(device, &[&b.step, &b.grid, &b.active_blocks, &b.block_args]),
                 scatter,
                 grid,
             }
@@ -520,60 +599,117 @@ impl GpuSim {
             buffers,
             binds,
             num_particles: n,
-            num_nodes: nodes,
+            num_blocks: blocks,
         })
     }
 
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
-        let (k, b, bind) = (&self.kernels, &self.buffers, &self.binds);
-        let particle_groups = self.num_particles.div_ceil(256);
-        let node_groups = self.num_nodes.div_ceil(256);
+        let passes = self.passes();
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("sim steps"),
             });
         for _ in 0..steps {
-            match &self.atomic {
-                Some(_) => enc.clear_buffer(&b.grid, 0, None),
-                None => {
-                    enc.clear_buffer(&b.ranges, 0, None);
-                    enc.clear_buffer(&b.node_active, 0, None);
-                }
-            }
-            let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("sim step"),
-                timestamp_writes: None,
-            });
-            if self.num_particles > 0 {
-                k.prepare.dispatch(&mut c, &bind.prepare, particle_groups);
-            }
-            match &self.atomic {
-                Some(a) => {
-                    if self.num_particles > 0 {
-                        a.scatter.dispatch(&mut c, &a.scatter_bind, particle_groups);
-                    }
-                    a.grid.dispatch(&mut c, &a.grid_bind, node_groups);
-                }
-                None => {
-                    if self.num_particles > 0 {
-                        k.sort.record(&mut c, &k.scan, &bind.sort);
-                        k.ranges
-                            .kernel
-                            .dispatch(&mut c, &bind.ranges, particle_groups);
-                        k.mark_nodes
-                            .dispatch(&mut c, &bind.mark_nodes, particle_groups);
-                    }
-                    k.p2g.dispatch(&mut c, &bind.p2g, node_groups);
-                }
-            }
-            if self.num_particles > 0 {
-                k.g2p.dispatch(&mut c, &bind.g2p, particle_groups);
-            }
+            self.record(&mut enc, &passes);
         }
         gpu.queue.submit([enc.finish()]);
         gpu.check()
+    }
+
+    /// The passes of one step, in order, for this P2G path.
+    fn passes(&self) -> Vec<StepPass> {
+        use StepPass::*;
+        let particles = self.num_particles > 0;
+        let mut list = vec![Clear];
+        if !particles {
+            // Nothing reaches the grid, and there is nothing to move.
+            return list;
+        }
+        list.push(Prepare);
+        match &self.atomic {
+            Some(_) => list.extend([Scatter, CompactBlocks, GridFromSums]),
+            None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
+        }
+        list.push(G2p);
+        list
+    }
+
+    /// Record `passes` (buffer clears first, then the dispatches in one compute pass).
+    fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[StepPass]) {
+        let (k, b, bind) = (&self.kernels, &self.buffers, &self.binds);
+        if passes.contains(&StepPass::Clear) {
+            match &self.atomic {
+                Some(_) => enc.clear_buffer(&b.grid, 0, None),
+                None => enc.clear_buffer(&b.ranges, 0, None),
+            }
+            enc.clear_buffer(&b.block_args, 0, None);
+        }
+        let particle_groups = self.num_particles.div_ceil(256);
+        let block_groups = self.num_blocks.div_ceil(256);
+        let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("sim step"),
+            timestamp_writes: None,
+        });
+        for pass in passes {
+            match pass {
+                StepPass::Clear => {}
+                StepPass::Prepare => k.prepare.dispatch(&mut c, &bind.prepare, particle_groups),
+                StepPass::Scatter => {
+                    let a = self.atomic.as_ref().expect("atomic path");
+                    a.scatter.dispatch(&mut c, &a.scatter_bind, particle_groups);
+                }
+                StepPass::GridFromSums => {
+                    let a = self.atomic.as_ref().expect("atomic path");
+                    a.grid
+                        .dispatch_indirect(&mut c, &a.grid_bind, &b.block_args, 0);
+                }
+                StepPass::Sort => k.sort.record(&mut c, &k.scan, &bind.sort),
+                StepPass::Ranges => k
+                    .ranges
+                    .kernel
+                    .dispatch(&mut c, &bind.ranges, particle_groups),
+                StepPass::MarkBlocks => {
+                    k.mark_blocks
+                        .dispatch(&mut c, &bind.mark_blocks, particle_groups)
+                }
+                StepPass::CompactBlocks => {
+                    k.compact_blocks
+                        .dispatch(&mut c, &bind.compact_blocks, block_groups)
+                }
+                StepPass::Gather => k.p2g.dispatch_indirect(&mut c, &bind.p2g, &b.block_args, 0),
+                StepPass::G2p => k.g2p.dispatch(&mut c, &bind.g2p, particle_groups),
+            }
+        }
+    }
+
+    /// Milliseconds per step of each pass, over `steps` real steps in which every pass is
+    /// submitted on its own and waited for (so the sum exceeds a step's time by the
+    /// submissions' overhead). For benchmarks.
+    pub fn profile_passes(
+        &self,
+        gpu: &GpuContext,
+        steps: u32,
+    ) -> Result<Vec<(&'static str, f64)>, GpuError> {
+        let passes = self.passes();
+        let mut total = vec![0.0; passes.len()];
+        for _ in 0..steps {
+            for (pass, t) in passes.iter().zip(&mut total) {
+                let mut enc = gpu.device.create_command_encoder(&Default::default());
+                self.record(&mut enc, &[*pass]);
+                let start = std::time::Instant::now();
+                gpu.queue.submit([enc.finish()]);
+                gpu.wait()?;
+                *t += start.elapsed().as_secs_f64();
+            }
+        }
+        gpu.check()?;
+        Ok(passes
+            .iter()
+            .zip(total)
+            .map(|(p, t)| (p.name(), t * 1e3 / f64::from(steps)))
+            .collect())
     }
 
     /// The P2G path in use.
@@ -613,7 +749,9 @@ impl GpuSim {
             &b.affine,
             &b.ranges,
             &b.grid,
-            &b.node_active,
+            &b.block_flags,
+            &b.active_blocks,
+            &b.block_args,
         ]
         .iter()
         .map(|buf| buf.size())
@@ -638,7 +776,35 @@ impl GpuSim {
         Ok(Watchdog {
             nonfinite: v[0],
             escaped: v[1],
+            // g2p.wgsl stores the bitwise NOT of the step so that atomicMax keeps the first.
+            first_step: (v[2] != 0).then_some(!v[2]),
         })
+    }
+
+    /// The blocks of 4³ nodes the last step's node passes visited (indices x-fastest over
+    /// [`blocks`](Self::blocks) per axis), sorted.
+    pub fn active_blocks(&self, gpu: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let b = &self.buffers;
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sim active blocks readback"),
+            size: 16 + b.active_blocks.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&b.block_args, 0, &staging, 0, Some(16));
+        enc.copy_buffer_to_buffer(&b.active_blocks, 0, &staging, 16, None);
+        gpu.queue.submit([enc.finish()]);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(gpu, &staging)?);
+        let count = words[3] as usize;
+        let mut list = words[4..4 + count].to_vec();
+        list.sort_unstable();
+        Ok(list)
+    }
+
+    /// The number of blocks of 4³ nodes covering the grid.
+    pub fn blocks(&self) -> u32 {
+        self.num_blocks
     }
 
     /// Copy the particle state back (positions, velocities, F, C, α; masses, volumes and

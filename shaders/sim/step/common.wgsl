@@ -64,8 +64,11 @@ struct SimStep {
 
 // Every step pass binds the step's constants here. Helpers below read this global rather
 // than taking the struct as a parameter: the struct is over a kilobyte, and CPU drivers
-// (lavapipe) copy by-value arguments.
-@group(0) @binding(0) var<uniform> step: SimStep;
+// (lavapipe) copy by-value arguments. A read-only storage buffer rather than a uniform:
+// lavapipe specialises a shader on uniform values that steer its branches and loops, and
+// re-specialised the grid pass on every dispatch (2 ms each, measured by
+// `splatter bench sim --per-pass`).
+@group(0) @binding(0) var<storage, read> step: SimStep;
 
 // Key of a particle whose stencil is off the grid: one past the last base cell, so those
 // particles sort last and fall into the extra slot of the cell ranges.
@@ -98,4 +101,49 @@ fn grid_stencil(x: vec3<f32>) -> GridStencil {
 
 fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
     return (wid.x + wid.y * nwg.x) * 256u + lid;
+}
+
+// Active blocks. The node passes visit only blocks of 4×4×4 nodes that some particle's
+// stencil reaches, one workgroup of 64 invocations per block: most of a domain is air, and
+// even skipping an empty node costs a load (3.9 ms for 65³ nodes on lavapipe). Particle
+// passes flag the blocks (mark_blocks.wgsl, p2g_scatter.wgsl), compact_blocks.wgsl lists
+// them, and the node passes are dispatched indirectly over the list.
+const BLOCK: u32 = 4u;
+
+fn blocks_per_axis() -> vec3<u32> {
+    return (step.nodes + BLOCK - 1u) / BLOCK;
+}
+
+fn block_index(b: vec3<u32>) -> u32 {
+    let nb = blocks_per_axis();
+    return b.x + nb.x * (b.y + nb.y * b.z);
+}
+
+// The blocks holding the 3×3×3 nodes from `base`: lo..=hi per axis (at most 2 per axis).
+fn stencil_block_lo(base: vec3<u32>) -> vec3<u32> {
+    return base / BLOCK;
+}
+
+fn stencil_block_hi(base: vec3<u32>) -> vec3<u32> {
+    return (base + 2u) / BLOCK;
+}
+
+// Node `lid` (0..64) of block `block`, and whether it lies on the grid (blocks at the far
+// faces stick out when the node count is not a multiple of 4).
+struct BlockNode {
+    ok: bool,
+    node: vec3<u32>,
+    index: u32,
+}
+
+fn block_node(block: u32, lid: u32) -> BlockNode {
+    let nb = blocks_per_axis();
+    let b = vec3<u32>(block % nb.x, (block / nb.x) % nb.y, block / (nb.x * nb.y));
+    let node = b * BLOCK + vec3<u32>(lid % BLOCK, (lid / BLOCK) % BLOCK, lid / (BLOCK * BLOCK));
+    let n = step.nodes;
+    var out: BlockNode;
+    out.ok = all(node < n);
+    out.node = node;
+    out.index = node.x + n.x * (node.y + n.y * node.z);
+    return out;
 }

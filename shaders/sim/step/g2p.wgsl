@@ -10,8 +10,16 @@
 @group(0) @binding(6) var<storage, read> material: array<u32>;
 @group(0) @binding(7) var<storage, read> grid: array<vec4<f32>>;
 // The watchdog's counters (SPEC §2): [0] particles with a non-finite position, velocity or
-// F; [1] particles whose stencil is off the grid (left the domain). Read once per frame.
+// F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
+// counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
+// [3] steps since the last read (compact_blocks.wgsl). Read and cleared once per frame.
 @group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 4>;
+
+fn count_failure(slot: u32) {
+    atomicAdd(&flags[slot], 1u);
+    // compact_blocks.wgsl has already counted this step
+    atomicMax(&flags[2], ~(atomicLoad(&flags[3]) - 1u));
+}
 
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -25,9 +33,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let st = grid_stencil(xm.xyz);
     if !st.ok {
         if sim_is_finite3(xm.xyz) {
-            atomicAdd(&flags[1], 1u);
+            count_failure(1u);
         } else {
-            atomicAdd(&flags[0], 1u);
+            count_failure(0u);
         }
         let v = vv.xyz + step.gravity * step.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
@@ -62,6 +70,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     deformation[p] = f_new;
     if !(sim_is_finite3(vp) && sim_is_finite_mat3(f_new)) {
-        atomicAdd(&flags[0], 1u);
+        count_failure(0u);
     }
 }

@@ -1,4 +1,4 @@
-// P2G, part 2, and the grid update (per grid node): gather m_i = Σ w_ip m_p and
+// P2G, part 2, and the grid update (per node of the active blocks): gather m_i = Σ w_ip m_p and
 // p_i = Σ w_ip (m_p v_p + affine_p d_ip) over the particles of the 27 base cells whose
 // stencils reach node i (SPEC §2 step 1), then the node's velocity (grid_update.wgsl,
 // SPEC §2 step 2). Particles are sorted by base cell, so no atomics are needed: the sum has
@@ -12,22 +12,25 @@
 @group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
 // xyz: velocity after the grid update, w: mass
 @group(0) @binding(6) var<storage, read_write> grid: array<vec4<f32>>;
-// 1 where some particle's stencil may reach the node (mark_nodes.wgsl)
-@group(0) @binding(7) var<storage, read> node_active: array<u32>;
+// The blocks some particle's stencil reaches (compact_blocks.wgsl); nodes elsewhere are left
+// as they are: no particle reads them.
+@group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
+// [3]: the number of active blocks
+@group(0) @binding(8) var<storage, read> block_args: array<u32, 4>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let idx = flat_id(wid, nwg, lid);
-    let n = step.nodes;
-    if idx >= n.x * n.y * n.z {
+    let slot = wid.x + wid.y * nwg.x;
+    if slot >= block_args[3] {
         return;
     }
-    // Inactive nodes are left as they are: no particle reads them.
-    if node_active[idx] == 0u {
+    let bn = block_node(active_blocks[slot], lid);
+    if !bn.ok {
         return;
     }
-    let node = vec3<i32>(vec3<u32>(idx % n.x, (idx / n.x) % n.y, idx / (n.x * n.y)));
+    let idx = bn.index;
+    let node = vec3<i32>(bn.node);
     let bc = vec3<i32>(step.cells) - 1;
     var msum = 0.0;
     var psum = vec3<f32>(0.0);

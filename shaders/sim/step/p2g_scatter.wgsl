@@ -10,6 +10,8 @@
 // The grid, 4 floats per node: momentum x, y, z, mass; cleared before every step and turned
 // into velocities in place by grid_from_sums.wgsl
 @group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<f32>>;
+// The blocks this particle's stencil reaches are flagged here (common.wgsl, active blocks).
+@group(0) @binding(5) var<storage, read_write> block_flags: array<u32>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -26,6 +28,16 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let s = st.s;
     let n = step.nodes;
     let base = vec3<u32>(s.base);
+    let lo = stencil_block_lo(base);
+    let hi = stencil_block_hi(base);
+    for (var z = lo.z; z <= hi.z; z++) {
+        for (var y = lo.y; y <= hi.y; y++) {
+            for (var x = lo.x; x <= hi.x; x++) {
+                // Every writer stores the same value, so the order does not matter.
+                block_flags[block_index(vec3<u32>(x, y, z))] = 1u;
+            }
+        }
+    }
     let mv = xm.w * v_volume[p].xyz;
     let a = affine[p];
     for (var k = 0u; k < 27u; k++) {

@@ -1,0 +1,35 @@
+// Active blocks (per block): list the flagged blocks and reset their flags for the next
+// step. The list's length goes into indirect dispatch arguments for the node passes, split
+// as x = min(count, 65535), y = ⌈count / 65535⌉ (the portable per-dimension limit); node
+// passes bounds-check their slot against the count.
+
+@group(0) @binding(1) var<storage, read_write> block_flags: array<u32>;
+@group(0) @binding(2) var<storage, read_write> active_blocks: array<u32>;
+// [x, y, z] workgroups of the node passes, [3] the number of active blocks; zeroed before
+// every step
+@group(0) @binding(3) var<storage, read_write> block_args: array<atomic<u32>, 4>;
+
+// The watchdog's counters (g2p.wgsl); [3] counts the steps since the last read: this pass
+// runs once per step, so it keeps the clock.
+@group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>, 4>;
+
+const MAX_GROUPS_X: u32 = 65535u;
+
+@compute @workgroup_size(256)
+fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
+        @builtin(local_invocation_index) lid: u32) {
+    let b = flat_id(wid, nwg, lid);
+    if b == 0u {
+        atomicAdd(&flags[3], 1u);
+    }
+    let nb = blocks_per_axis();
+    if b >= nb.x * nb.y * nb.z || block_flags[b] == 0u {
+        return;
+    }
+    block_flags[b] = 0u;
+    let slot = atomicAdd(&block_args[3], 1u);
+    active_blocks[slot] = b;
+    atomicMax(&block_args[0], min(slot + 1u, MAX_GROUPS_X));
+    atomicMax(&block_args[1], slot / MAX_GROUPS_X + 1u);
+    atomicMax(&block_args[2], 1u);
+}
