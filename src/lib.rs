@@ -7,6 +7,7 @@
 pub mod bench;
 pub mod gpu;
 pub mod output;
+pub mod relight;
 pub mod render;
 pub mod rng;
 pub mod scene;

@@ -8,10 +8,14 @@
 //! 5. [`passes::TileRanges`] — start/end of each tile's run;
 //! 6. [`passes::Rasterize`] — front-to-back compositing per 16×16 tile.
 //!
+//! With lighting set ([`GpuRenderer::set_lighting`], [`lighting`]), the shadow volume is
+//! built before pass 1 and every visible Gaussian's colour is relit right after it.
+//!
 //! All passes of a frame go into one command buffer; the image and a few counters are read
 //! back at the end. Buffers are kept between frames and grown only when needed.
 
 pub mod layout;
+pub mod lighting;
 pub(crate) mod passes;
 pub mod radix_sort;
 pub mod scan;
@@ -19,8 +23,10 @@ pub mod scan;
 use glam::Vec3;
 
 use crate::gpu::{GpuContext, GpuError};
+use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
+use lighting::{Lighting, LightingSetup};
 use radix_sort::{RadixSort, SortBuffers, SortPlan};
 use scan::{Scan, ScanPlan};
 
@@ -115,6 +121,7 @@ pub struct GpuRenderer {
     /// Upper bound on the tile pairs of a frame, below what the adapter allows.
     pair_limit: Option<u32>,
     profile: bool,
+    lighting: Option<Lighting>,
 }
 
 #[derive(Default)]
@@ -173,6 +180,7 @@ impl GpuRenderer {
             warned: WarnedOnce::default(),
             pair_limit: None,
             profile: false,
+            lighting: None,
         }
     }
 
@@ -186,6 +194,49 @@ impl GpuRenderer {
     /// memory. Past the cap the farthest Gaussians are dropped, with a warning.
     pub fn limit_tile_pairs(&mut self, max: u32) {
         self.pair_limit = Some(max.max(1));
+    }
+
+    /// Relight every frame from now on (after [`upload`](Self::upload): `setup.shading` has
+    /// one entry per uploaded Gaussian). Lights come per frame from
+    /// [`set_lights`](Self::set_lights); until then only the ambient term lights the scene.
+    pub fn set_lighting(
+        &mut self,
+        gpu: &GpuContext,
+        setup: &LightingSetup,
+    ) -> Result<(), GpuError> {
+        let count = self.splats.as_ref().map_or(0, |s| s.count) as usize;
+        if setup.shading.len() != count {
+            return Err(GpuError::Failed(format!(
+                "lighting: {} shading entries for {count} uploaded Gaussians",
+                setup.shading.len()
+            )));
+        }
+        if let Some(bad) = setup
+            .shading
+            .iter()
+            .find(|s| s[1] as usize >= setup.materials.len())
+        {
+            return Err(GpuError::Failed(format!(
+                "lighting: material {} of {}",
+                bad[1],
+                setup.materials.len()
+            )));
+        }
+        self.lighting = Some(Lighting::new(gpu, setup)?);
+        Ok(())
+    }
+
+    /// The point lights of the next frames (at most `max_lights` of the setup are used).
+    pub fn set_lights(&mut self, lights: &[PointLight]) {
+        if let Some(l) = &mut self.lighting {
+            l.frame_lights = lights.to_vec();
+        }
+    }
+
+    /// Per-Gaussian shading records (packed normal, material) when lighting is set: the
+    /// derive pass writes the simulated Gaussians' normals here.
+    pub fn shading_buffer(&self) -> Option<&wgpu::Buffer> {
+        self.lighting.as_ref().map(|l| &l.shading)
     }
 
     /// The uploaded Gaussians on the GPU (`layout::GaussianIn` records): a simulation's
@@ -498,6 +549,34 @@ impl GpuRenderer {
         }
     }
 
+    /// Bind groups of the lighting passes over the current buffers (cheap; made per frame
+    /// so that re-uploads and grown buffers need no bookkeeping).
+    fn lighting_binds(&self, gpu: &GpuContext, l: &Lighting) -> LightingBinds {
+        let s = self.splats.as_ref().expect("upload() before render()");
+        let device = &gpu.device;
+        LightingBinds {
+            splat: l
+                .splat
+                .bind(device, &[&l.lights, &s.gaussians, &l.depth, &l.count]),
+            transmit: l
+                .transmit
+                .bind(device, &[&l.lights, &l.depth, &l.transmittance]),
+            shade: l.shade.bind(
+                device,
+                &[
+                    &self.frame,
+                    &l.lights,
+                    &s.gaussians,
+                    &l.shading,
+                    &l.materials,
+                    &l.transmittance,
+                    &s.depth_keys,
+                    &s.projected,
+                ],
+            ),
+        }
+    }
+
     fn render_once(
         &self,
         gpu: &GpuContext,
@@ -514,13 +593,42 @@ impl GpuRenderer {
         let groups = s.count.div_ceil(256);
         // The frame's stages, in order. All go into one compute pass (each dispatch is its
         // own synchronisation scope) unless passes are profiled one by one.
+        let light_binds = self
+            .lighting
+            .as_ref()
+            .filter(|_| s.count > 0)
+            .map(|l| self.lighting_binds(gpu, l));
         type Stage<'a> = (&'static str, Box<dyn Fn(&mut wgpu::ComputePass) + 'a>);
         let mut stages: Vec<Stage> = Vec::new();
+        if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
+            gpu.queue
+                .write_buffer(&l.lights, 0, bytemuck::bytes_of(&l.uniforms()));
+            if l.grid.is_some() {
+                let items = l.transmit_items();
+                stages.push((
+                    "shadows",
+                    Box::new(move |c| {
+                        l.splat.dispatch(c, &b.splat, groups);
+                        if items > 0 {
+                            l.transmit.dispatch(c, &b.transmit, items.div_ceil(256));
+                        }
+                    }),
+                ));
+            }
+        }
         if s.count > 0 {
             stages.push((
                 "project",
                 Box::new(|c| self.project.kernel.dispatch(c, &p.project, groups)),
             ));
+        }
+        if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
+            stages.push((
+                "shade",
+                Box::new(move |c| l.shade.dispatch(c, &b.shade, groups)),
+            ));
+        }
+        if s.count > 0 {
             stages.push((
                 "depth sort",
                 Box::new(|c| self.sort.record(c, &self.scan, &p.depth_sort)),
@@ -563,6 +671,9 @@ impl GpuRenderer {
             });
         enc.clear_buffer(&self.stats, 0, None);
         enc.clear_buffer(&f.ranges, 0, None);
+        if let Some(l) = self.lighting.as_ref().filter(|l| l.grid.is_some()) {
+            enc.clear_buffer(&l.depth, 0, None);
+        }
         if s.count == 0 {
             enc.clear_buffer(&f.key_count, 0, None);
         }
@@ -626,6 +737,12 @@ impl GpuRenderer {
             },
         ))
     }
+}
+
+struct LightingBinds {
+    splat: wgpu::BindGroup,
+    transmit: wgpu::BindGroup,
+    shade: wgpu::BindGroup,
 }
 
 /// Map a MAP_READ buffer, copy its contents out, unmap.

@@ -1,0 +1,73 @@
+// Shared declarations of the relighting passes (SPEC §8, docs/relighting.md). Mirrored by
+// `#[repr(C)]` types in src/render/gpu/lighting.rs (checked by a layout test). Concatenated
+// after shaders/common.wgsl.
+
+const MAX_LIGHTS: u32 = 8u;
+
+// Fixed-point unit of the optical-depth volume: u32 atomics add exactly (and GL has no
+// float atomics), so the volume is the same whatever the order of the adds.
+const DEPTH_UNIT: f32 = 1.0 / 1024.0;
+
+// Per-frame lighting constants. A storage buffer rather than a uniform: the passes branch
+// and loop on these values, which lavapipe would re-specialise the shaders on per dispatch.
+struct Lights {
+    // rgb: ambient light I_a, w unused
+    ambient: vec4<f32>,
+    // number of point lights, shadows on (1) or off (0)
+    count: u32,
+    shadows: u32,
+    _pad0: u32,
+    _pad1: u32,
+    // xyz: light position
+    position: array<vec4<f32>, MAX_LIGHTS>,
+    // rgb: colour × intensity (I_L)
+    radiance: array<vec4<f32>, MAX_LIGHTS>,
+    // The shadow volume: voxel (i, j, k) has its centre at lo + (i + ½, j + ½, k + ½)·h.
+    // xyz: lo, w: h
+    volume_lo_h: vec4<f32>,
+    // xyz: voxels per axis, w: unused
+    volume_res: vec4<u32>,
+}
+
+// Per-object shading weights (`ShadingParams`).
+struct ShadeMaterial {
+    ambient: f32,
+    diffuse: f32,
+    specular: f32,
+    shininess: f32,
+}
+
+// Blinn-Phong of one Gaussian (docs/relighting.md; twin of `relight::blinn_phong`):
+// k_a c0 ⊙ I_a + Σ_m T_m (c0 ⊙ I_L,m)(k_d D_m + k_s S_m)/r_m².
+fn light_term(c0: vec3<f32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: ShadeMaterial,
+              light_pos: vec3<f32>, radiance: vec3<f32>, t: f32) -> vec3<f32> {
+    let to_light = light_pos - p;
+    let r2 = max(dot(to_light, to_light), 1e-12);
+    let l = to_light * inverseSqrt(r2);
+    let hv = l + v;
+    let h = select(vec3<f32>(0.0), normalize(hv), dot(hv, hv) > 0.0);
+    let d = max(dot(n, l), 0.0);
+    let s = pow(max(dot(n, h), 0.0), m.shininess);
+    return t * c0 * radiance * (m.diffuse * d + m.specular * s) / r2;
+}
+
+// `relight::NO_NORMAL`: a Gaussian without a normal.
+const NO_NORMAL: u32 = 0x80008000u;
+
+// Inverse of `relight::oct_encode`: two 16-bit snorms on the octahedron → unit normal
+// (NO_NORMAL: zero).
+fn oct_decode(bits: u32) -> vec3<f32> {
+    if bits == NO_NORMAL {
+        return vec3<f32>(0.0);
+    }
+    let e = max(unpack2x16snorm(bits), vec2<f32>(-1.0));
+    let z = 1.0 - abs(e.x) - abs(e.y);
+    let t = max(-z, 0.0);
+    let sgn = select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+    let xy = e - sgn * t;
+    return normalize(vec3<f32>(xy, z));
+}
+
+fn voxel_index(v: vec3<u32>, res: vec3<u32>) -> u32 {
+    return v.x + res.x * (v.y + res.y * v.z);
+}

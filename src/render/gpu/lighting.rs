@@ -1,0 +1,221 @@
+//! Relighting on the GPU (SPEC §8, docs/relighting.md): the shadow volume
+//! (`shaders/render/shadow_splat.wgsl`, `shadow_transmit.wgsl`) and the Blinn-Phong shade
+//! pass (`shade.wgsl`), all sharing `shaders/render/lighting.wgsl`. The renderer runs the
+//! shadow passes before projecting and the shade pass right after, so the rasteriser
+//! composites shaded colours. CPU twins: [`crate::relight`].
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use wgpu::util::DeviceExt;
+
+use super::{shader_source, COMMON};
+use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::relight::shadow::VolumeGrid;
+use crate::relight::{PointLight, ShadingParams, MAX_LIGHTS};
+
+pub(crate) const LIGHTING: &str = include_str!("../../../shaders/render/lighting.wgsl");
+
+/// `Lights` of `lighting.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct LightsGpu {
+    pub ambient: [f32; 4],
+    pub count: u32,
+    pub shadows: u32,
+    pub _pad: [u32; 2],
+    pub position: [[f32; 4]; MAX_LIGHTS],
+    pub radiance: [[f32; 4]; MAX_LIGHTS],
+    pub volume_lo_h: [f32; 4],
+    pub volume_res: [u32; 4],
+}
+
+/// `ShadeMaterial` of `lighting.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadeMaterialGpu {
+    pub ambient: f32,
+    pub diffuse: f32,
+    pub specular: f32,
+    pub shininess: f32,
+}
+
+/// What the renderer needs to relight a set of Gaussians (fixed for a run; the lights move
+/// per frame through [`super::GpuRenderer::set_lights`]).
+#[derive(Clone, Debug)]
+pub struct LightingSetup {
+    /// Ambient light I_a.
+    pub ambient: Vec3,
+    /// Shading weights, indexed by `shading[i][1]`.
+    pub materials: Vec<ShadingParams>,
+    /// Per Gaussian: packed normal ([`crate::relight::oct_encode`]) and material index.
+    pub shading: Vec<[u32; 2]>,
+    /// The shadow volume, or None for no shadows.
+    pub shadows: Option<VolumeGrid>,
+    /// The most lights any frame will have (sizes the transmittance volume).
+    pub max_lights: usize,
+}
+
+/// The GPU state of relighting.
+pub(crate) struct Lighting {
+    pub shade: Kernel,
+    pub splat: Kernel,
+    pub transmit: Kernel,
+    pub lights: wgpu::Buffer,
+    pub materials: wgpu::Buffer,
+    /// Per Gaussian `vec2<u32>`: packed normal, material.
+    pub shading: wgpu::Buffer,
+    pub depth: wgpu::Buffer,
+    pub transmittance: wgpu::Buffer,
+    pub count: wgpu::Buffer,
+    pub grid: Option<VolumeGrid>,
+    pub ambient: Vec3,
+    pub frame_lights: Vec<PointLight>,
+    pub max_lights: usize,
+}
+
+fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
+    Kernel::new(
+        device,
+        label,
+        &shader_source(&[COMMON, LIGHTING, pass]),
+        "main",
+    )
+}
+
+impl Lighting {
+    pub fn new(gpu: &GpuContext, setup: &LightingSetup) -> Result<Lighting, GpuError> {
+        let device = &gpu.device;
+        if setup.materials.is_empty() && !setup.shading.is_empty() {
+            return Err(GpuError::Failed(
+                "lighting: no shading materials".to_string(),
+            ));
+        }
+        let max_lights = setup.max_lights.clamp(1, MAX_LIGHTS);
+        let voxels = setup.shadows.map_or(1, |g| g.voxels()) as u64;
+        let transmittance_bytes = voxels * max_lights as u64 * 4;
+        if transmittance_bytes > gpu.max_binding() {
+            return Err(GpuError::Failed(format!(
+                "the shadow volume ({voxels} voxels × {max_lights} lights) needs {} MiB, more than this adapter's {} MiB per buffer; lower lighting.shadows.resolution",
+                transmittance_bytes >> 20,
+                gpu.max_binding() >> 20
+            )));
+        }
+        let materials: Vec<ShadeMaterialGpu> = setup
+            .materials
+            .iter()
+            .map(|m| ShadeMaterialGpu {
+                ambient: m.ambient,
+                diffuse: m.diffuse,
+                specular: m.specular,
+                shininess: m.shininess,
+            })
+            .chain(std::iter::once(ShadeMaterialGpu::zeroed()))
+            .collect();
+        let init = |label: &str, contents: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+            })
+        };
+        let mut shading_bytes = bytemuck::cast_slice::<[u32; 2], u8>(&setup.shading).to_vec();
+        shading_bytes.resize(shading_bytes.len().max(8), 0);
+        let count = setup.shading.len() as u32;
+        let zeroed = |label: &str, bytes: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(16),
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        Ok(Lighting {
+            shade: kernel(
+                device,
+                "shade",
+                include_str!("../../../shaders/render/shade.wgsl"),
+            ),
+            splat: kernel(
+                device,
+                "shadow_splat",
+                include_str!("../../../shaders/render/shadow_splat.wgsl"),
+            ),
+            transmit: kernel(
+                device,
+                "shadow_transmit",
+                include_str!("../../../shaders/render/shadow_transmit.wgsl"),
+            ),
+            lights: zeroed("lights", std::mem::size_of::<LightsGpu>() as u64),
+            materials: init("shade materials", bytemuck::cast_slice(&materials)),
+            shading: init("shading", &shading_bytes),
+            depth: zeroed("shadow optical depth", voxels * 4),
+            transmittance: zeroed("shadow transmittance", transmittance_bytes),
+            count: init("lighting count", bytemuck::bytes_of(&[count, 0, 0, 0])),
+            grid: setup.shadows,
+            ambient: setup.ambient,
+            frame_lights: Vec::new(),
+            max_lights,
+        })
+    }
+
+    /// The per-frame constants for the current lights.
+    pub fn uniforms(&self) -> LightsGpu {
+        let mut u = LightsGpu::zeroed();
+        u.ambient = self.ambient.extend(0.0).to_array();
+        let n = self.frame_lights.len().min(self.max_lights);
+        u.count = n as u32;
+        for (i, l) in self.frame_lights.iter().take(n).enumerate() {
+            u.position[i] = l.position.extend(1.0).to_array();
+            u.radiance[i] = l.radiance.extend(0.0).to_array();
+        }
+        if let Some(g) = self.grid {
+            u.shadows = 1;
+            u.volume_lo_h = g.lo.extend(g.h).to_array();
+            u.volume_res = g.res.extend(0).to_array();
+        }
+        u
+    }
+
+    /// Voxels × lights of the transmittance pass this frame.
+    pub fn transmit_items(&self) -> u32 {
+        match self.grid {
+            Some(g) => (g.voxels() * self.frame_lights.len().min(self.max_lights)) as u32,
+            None => 0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn layouts_match_wgsl() {
+        let src = shader_source(&[COMMON, LIGHTING]);
+        assert_layout!(
+            &src,
+            LightsGpu,
+            "Lights",
+            [
+                ambient,
+                count,
+                shadows,
+                position,
+                radiance,
+                volume_lo_h,
+                volume_res
+            ]
+        );
+        assert_layout!(
+            &src,
+            ShadeMaterialGpu,
+            "ShadeMaterial",
+            [ambient, diffuse, specular, shininess]
+        );
+    }
+}

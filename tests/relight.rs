@@ -1,0 +1,399 @@
+//! Relighting (issue 4): PCA normals against analytic normals, the shaded sphere against
+//! the Blinn-Phong formula, and shadows against the geometry that casts them. Normals and
+//! shading formulas are checked on the CPU (`splatter::relight`); the rendered images come
+//! from the GPU renderer on every test adapter.
+
+use glam::{Mat3, Vec3};
+use splatter::relight::normals::pca_normals;
+use splatter::splat::procedural::{ProceduralSpec, Shape};
+
+fn spec(shape: Shape, spacing: f32) -> ProceduralSpec {
+    ProceduralSpec {
+        shape,
+        spacing,
+        color: [0.8, 0.8, 0.8],
+        shells: vec![],
+        checker: None,
+        opacity: 0.95,
+        jitter: 0.25,
+        seed: 3,
+    }
+}
+
+fn angle_deg(a: Vec3, b: Vec3) -> f32 {
+    a.dot(b).clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+fn percentile(v: &mut [f32], q: f32) -> f32 {
+    v.sort_by(f32::total_cmp);
+    v[((v.len() - 1) as f32 * q).round() as usize]
+}
+
+/// Surface Gaussians (within half a spacing of the surface) of a filled, jittered sphere and
+/// box: PCA normals (k = 30) against the analytic outward normals — median < 5°, 95th
+/// percentile < 20° (issue 4). On the box, Gaussians within two spacings of an edge, where
+/// the analytic normal is not defined, are left out.
+#[test]
+fn pca_normals_match_analytic_normals_on_a_sphere_and_a_box() {
+    let spacing = 0.025;
+    let r = 0.4;
+    let sphere = spec(Shape::Sphere { radius: r }, spacing)
+        .generate()
+        .unwrap();
+    let n = pca_normals(&sphere.positions, 30);
+    let mut errors: Vec<f32> = sphere
+        .positions
+        .iter()
+        .zip(&n)
+        .filter(|(p, _)| p.length() > r - 0.5 * spacing)
+        .map(|(p, n)| angle_deg(*n, p.normalize()))
+        .collect();
+    let count = errors.len();
+    let (median, p95) = (percentile(&mut errors, 0.5), percentile(&mut errors, 0.95));
+    eprintln!("sphere: {count} surface Gaussians, angle error median {median:.2}°, p95 {p95:.2}°");
+    assert!(median < 5.0 && p95 < 20.0);
+
+    let half = Vec3::new(0.4, 0.3, 0.2);
+    let cube = spec(
+        Shape::Box {
+            size: (2.0 * half).to_array(),
+        },
+        spacing,
+    )
+    .generate()
+    .unwrap();
+    let n = pca_normals(&cube.positions, 30);
+    let mut errors = Vec::new();
+    let mut edge = 0;
+    for (p, n) in cube.positions.iter().zip(&n) {
+        // Distance below each face; the nearest face's normal is the analytic one.
+        let below = half - p.abs();
+        let axis = below.min_position();
+        if below[axis] > 0.5 * spacing {
+            continue;
+        }
+        // Along edges the analytic normal jumps from face to face; leave out the Gaussians
+        // within two spacings of a second face (counted and reported).
+        let mut others = below;
+        others[axis] = f32::INFINITY;
+        if others.min_element() < 2.0 * spacing {
+            edge += 1;
+            continue;
+        }
+        let mut want = Vec3::ZERO;
+        want[axis] = p[axis].signum();
+        errors.push(angle_deg(*n, want));
+    }
+    let count = errors.len();
+    let (median, p95) = (percentile(&mut errors, 0.5), percentile(&mut errors, 0.95));
+    eprintln!("box: {count} surface Gaussians away from edges ({edge} near edges left out), angle error median {median:.2}°, p95 {p95:.2}°");
+    assert!(median < 5.0 && p95 < 20.0);
+}
+
+/// Rotating the cloud rotates the normals with it (no dependence on the axes).
+#[test]
+fn pca_normals_rotate_with_the_object() {
+    let sphere = spec(Shape::Sphere { radius: 0.3 }, 0.03)
+        .generate()
+        .unwrap();
+    let rot = Mat3::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 1.1);
+    let moved: Vec<Vec3> = sphere.positions.iter().map(|p| rot * *p).collect();
+    let a = pca_normals(&sphere.positions, 30);
+    let b = pca_normals(&moved, 30);
+    let worst = a
+        .iter()
+        .zip(&b)
+        .zip(&sphere.positions)
+        .filter(|(_, p)| p.length() > 0.27)
+        .map(|((a, b), _)| angle_deg(rot * *a, *b))
+        .fold(0.0f32, f32::max);
+    assert!(worst < 0.5, "worst {worst}°");
+}
+
+// ------------------------------------------------------------------------------------------
+// Rendered images (GPU)
+// ------------------------------------------------------------------------------------------
+
+use splatter::relight::shadow::VolumeGrid;
+use splatter::relight::{blinn_phong, oct_encode, PointLight, ShadingParams};
+use splatter::render::gpu::lighting::LightingSetup;
+use splatter::render::{Camera, GpuRenderer, Splats};
+
+fn gpus() -> Vec<splatter::gpu::GpuContext> {
+    splatter::gpu::test_contexts()
+}
+
+/// Splats of procedural objects, with PCA normals per object and one material.
+fn lit_scene(objects: &[(ProceduralSpec, Vec3)]) -> (Splats, Vec<[u32; 2]>) {
+    let mut splats = Splats::default();
+    let mut shading = Vec::new();
+    for (spec, at) in objects {
+        let cloud = spec.generate().unwrap();
+        let s = Splats::from_cloud(&cloud, Mat3::IDENTITY, *at);
+        let normals = pca_normals(&s.means, 30);
+        shading.extend(normals.iter().map(|n| [oct_encode(*n), 0]));
+        splats.append(s);
+    }
+    (splats, shading)
+}
+
+fn luminance(img: &[u8], w: u32, x: u32, y: u32) -> f32 {
+    let i = 4 * (y * w + x) as usize;
+    (f32::from(img[i]) + f32::from(img[i + 1]) + f32::from(img[i + 2])) / (3.0 * 255.0)
+}
+
+/// Where the camera ray through the centre of pixel (x, y) meets the sphere |p − c| = r
+/// (the nearer hit), if it does.
+fn ray_sphere(cam: &Camera, x: u32, y: u32, c: Vec3, r: f32) -> Option<Vec3> {
+    let (cx, cy) = cam.principal_point();
+    let d = (cam.rotation
+        * Vec3::new(
+            (x as f32 + 0.5 - cx) / cam.fx,
+            (y as f32 + 0.5 - cy) / cam.fy,
+            1.0,
+        ))
+    .normalize();
+    let o = cam.position - c;
+    let b = o.dot(d);
+    let disc = b * b - (o.length_squared() - r * r);
+    (disc >= 0.0).then(|| cam.position + d * (-b - disc.sqrt()))
+}
+
+/// A grey sphere lit by one point light from +x: the rendered image follows the analytic
+/// Blinn-Phong shading of a sphere (pixel by pixel, away from the silhouette), its +x half
+/// is brighter than its −x half, and its brightest spot is where the formula puts it.
+/// Shadows are on: a convex object must not shadow its own lit side.
+#[test]
+fn a_lit_sphere_is_shaded_as_the_formula_says() {
+    let r = 0.5;
+    let (splats, shading) = lit_scene(&[(spec(Shape::Sphere { radius: r }, 0.02), Vec3::ZERO)]);
+    let grey = 0.6;
+    let ambient = Vec3::splat(0.2);
+    let light = PointLight {
+        position: Vec3::new(2.0, 0.5, 1.5),
+        radiance: Vec3::splat(4.0),
+    };
+    let w = ShadingParams::default();
+    let (width, height) = (96u32, 96u32);
+    let cam = Camera::look_at(
+        Vec3::new(0.0, 0.0, 3.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        30f32.to_radians(),
+        width,
+        height,
+    );
+    // The analytic image of the shaded sphere surface.
+    let shade = |p: Vec3| {
+        let n = p.normalize();
+        blinn_phong(
+            Vec3::splat(grey),
+            p,
+            n,
+            cam.position,
+            ambient,
+            &[light],
+            &[1.0],
+            &w,
+        )
+        .x
+    };
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        let mut s = splats.clone();
+        for c in s.sh.chunks_mut(3) {
+            // Every Gaussian grey: c0 = 0.5 + C0 · dc.
+            c.fill((grey - 0.5) / splatter::splat::sh::C0);
+        }
+        renderer.upload(&gpu, &s).unwrap();
+        renderer
+            .set_lighting(
+                &gpu,
+                &LightingSetup {
+                    ambient,
+                    materials: vec![w],
+                    shading: shading.clone(),
+                    shadows: Some(VolumeGrid::covering(
+                        Vec3::splat(-0.6),
+                        Vec3::splat(0.6),
+                        48,
+                    )),
+                    max_lights: 1,
+                },
+            )
+            .unwrap();
+        renderer.set_lights(&[light]);
+        let img = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        let (mut right, mut left, mut nr, mut nl) = (0.0, 0.0, 0, 0);
+        let (mut err_sum, mut err_n, mut worst) = (0.0f32, 0, 0.0f32);
+        let (mut best, mut best_px) = (0.0f32, (0u32, 0u32));
+        let (mut want_best, mut want_px) = (0.0f32, (0u32, 0u32));
+        for y in 0..height {
+            for x in 0..width {
+                let Some(p) = ray_sphere(&cam, x, y, Vec3::ZERO, r) else {
+                    continue;
+                };
+                let got = luminance(&img.rgba, width, x, y);
+                if x >= width / 2 {
+                    right += got;
+                    nr += 1;
+                } else {
+                    left += got;
+                    nl += 1;
+                }
+                // Away from the silhouette (where splats thin out): compare to the formula.
+                if p.normalize().dot((cam.position - p).normalize()) > 0.5 {
+                    let want = shade(p).min(1.0);
+                    let e = (got - want).abs();
+                    err_sum += e;
+                    err_n += 1;
+                    worst = worst.max(e);
+                    if want > want_best {
+                        (want_best, want_px) = (want, (x, y));
+                    }
+                    if got > best {
+                        (best, best_px) = (got, (x, y));
+                    }
+                }
+            }
+        }
+        let (right, left) = (right / nr as f32, left / nl as f32);
+        let mean_err = err_sum / err_n as f32;
+        let dist = ((best_px.0 as f32 - want_px.0 as f32).powi(2)
+            + (best_px.1 as f32 - want_px.1 as f32).powi(2))
+        .sqrt();
+        let sphere_px = cam.fx * r / 3.0;
+        eprintln!(
+            "{}: +x half {right:.3}, −x half {left:.3}; vs formula: mean |Δ| {mean_err:.3}, worst {worst:.3} over {err_n} pixels; brightest at {best_px:?} ({best:.3}), formula {want_px:?} ({want_best:.3}): {dist:.1} px of a {sphere_px:.0} px radius",
+            gpu.describe()
+        );
+        assert!(right > 1.3 * left, "the lit half is brighter");
+        assert!(mean_err < 0.04, "mean error {mean_err}");
+        assert!(dist < 0.15 * sphere_px, "brightest spot {dist} px off");
+    }
+}
+
+/// A blob between a point light and a ground slab: the slab darkens where the rays from it
+/// to the light pass through the blob, and nowhere else (each pixel of the slab compared
+/// with the same render without shadows); moving the light to the other side moves the
+/// shadow with it.
+#[test]
+fn a_blob_shadows_the_slab_where_the_geometry_says() {
+    let blob_c = Vec3::new(0.0, 0.0, 0.45);
+    let blob_r = 0.2;
+    let slab = ProceduralSpec {
+        shape: Shape::Slab {
+            size: [2.4, 2.4],
+            thickness: 0.06,
+        },
+        ..spec(Shape::Sphere { radius: 1.0 }, 0.03)
+    };
+    let (splats, shading) = lit_scene(&[
+        (slab, Vec3::ZERO),
+        (spec(Shape::Sphere { radius: blob_r }, 0.02), blob_c),
+    ]);
+    let (width, height) = (96u32, 96u32);
+    let cam = Camera::look_at(
+        Vec3::new(0.0, 0.0, 4.0),
+        Vec3::ZERO,
+        Vec3::Y,
+        34f32.to_radians(),
+        width,
+        height,
+    );
+    let grid = VolumeGrid::covering(
+        Vec3::new(-1.25, -1.25, -0.1),
+        Vec3::new(1.25, 1.25, 0.7),
+        64,
+    );
+    for gpu in gpus() {
+        for light_x in [1.0f32, -1.0] {
+            let light = PointLight {
+                position: Vec3::new(light_x, 0.0, 1.5),
+                radiance: Vec3::splat(2.0),
+            };
+            let mut images = Vec::new();
+            for shadows in [None, Some(grid)] {
+                let mut renderer = GpuRenderer::new(&gpu);
+                renderer.upload(&gpu, &splats).unwrap();
+                renderer
+                    .set_lighting(
+                        &gpu,
+                        &LightingSetup {
+                            ambient: Vec3::splat(0.1),
+                            materials: vec![ShadingParams::default()],
+                            shading: shading.clone(),
+                            shadows,
+                            max_lights: 1,
+                        },
+                    )
+                    .unwrap();
+                renderer.set_lights(&[light]);
+                images.push(renderer.render(&gpu, &cam, Vec3::ZERO).unwrap().rgba);
+            }
+            // Classify slab pixels by where the ray from the slab point to the light passes
+            // the blob's centre (in blob radii); skip pixels that see the blob itself.
+            let (mut inside, mut ni, mut outside_min, mut no) = (0.0f32, 0, f32::MAX, 0);
+            let mut dark_centroid = Vec3::ZERO;
+            for y in 0..height {
+                for x in 0..width {
+                    if ray_sphere(&cam, x, y, blob_c, blob_r * 1.3).is_some() {
+                        continue;
+                    }
+                    let Some(p) = ray_plane(&cam, x, y) else {
+                        continue;
+                    };
+                    if p.x.abs() > 1.1 || p.y.abs() > 1.1 {
+                        continue;
+                    }
+                    let d = (light.position - p).normalize();
+                    let miss = (blob_c - p).cross(d).length() / blob_r;
+                    let lit = luminance(&images[0], width, x, y);
+                    if lit < 0.05 {
+                        continue; // too dark to measure a ratio (facing away)
+                    }
+                    let ratio = luminance(&images[1], width, x, y) / lit;
+                    if miss < 0.7 {
+                        inside += ratio;
+                        ni += 1;
+                        dark_centroid += p;
+                    } else if miss > 1.6 {
+                        outside_min = outside_min.min(ratio);
+                        no += 1;
+                    }
+                }
+            }
+            let inside = inside / ni as f32;
+            let centroid = dark_centroid / ni as f32;
+            // The shadow's centre: the blob's centre projected from the light onto z = 0.
+            let t = light.position.z / (light.position.z - blob_c.z);
+            let want = light.position + (blob_c - light.position) * t;
+            eprintln!(
+                "{}: light x = {light_x}: {ni} pixels inside the predicted shadow, mean brightness ratio {inside:.3}; {no} pixels well outside, lowest ratio {outside_min:.3}; shadow centre predicted ({:.2}, {:.2})",
+                gpu.describe(),
+                want.x,
+                want.y,
+            );
+            assert!(ni > 20 && no > 1000, "test setup: {ni} / {no} pixels");
+            assert!(inside < 0.5, "the shadow darkens the slab: ratio {inside}");
+            assert!(
+                outside_min > 0.9,
+                "no shadow elsewhere: ratio {outside_min}"
+            );
+            assert!((centroid.x - want.x).abs() < 0.15, "{centroid} vs {want}");
+        }
+    }
+}
+
+/// Where the camera ray through pixel (x, y) meets the plane z = 0.
+fn ray_plane(cam: &Camera, x: u32, y: u32) -> Option<Vec3> {
+    let (cx, cy) = cam.principal_point();
+    let d = cam.rotation
+        * Vec3::new(
+            (x as f32 + 0.5 - cx) / cam.fx,
+            (y as f32 + 0.5 - cy) / cam.fy,
+            1.0,
+        );
+    let t = -cam.position.z / d.z;
+    (t > 0.0).then(|| cam.position + d * t)
+}
