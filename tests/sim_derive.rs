@@ -4,7 +4,9 @@
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3};
 use splatter::gpu::GpuContext;
+use splatter::relight::{oct_decode, oct_encode, ShadingParams};
 use splatter::render::gpu::layout::GaussianIn;
+use splatter::render::gpu::lighting::LightingSetup;
 use splatter::render::gpu::read_buffer;
 use splatter::render::splats::{mat3_from_sym3, sym3_from_mat3};
 use splatter::render::{cpu, Camera, GpuRenderer, Splats};
@@ -12,7 +14,7 @@ use splatter::rng::SplitMix64;
 use splatter::sim::cpu::{
     Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
-use splatter::sim::derive::{derive_gaussian, rest_covariance, Derive};
+use splatter::sim::derive::{derive_gaussian, derive_normal, rest_covariance, Derive};
 use splatter::sim::gpu::GpuSim;
 use splatter::splat::procedural::ProceduralSpec;
 
@@ -51,6 +53,20 @@ fn deform_and_derive(
     amount: f64,
     r: &mut impl FnMut() -> f32,
 ) -> GpuRenderer {
+    deform_and_derive_lit(gpu, splats, particles, offset, amount, r, None)
+}
+
+/// As [`deform_and_derive`], with relighting set up first (`shading`: packed rest normal and
+/// material per Gaussian) so that the derive pass also transports normals.
+fn deform_and_derive_lit(
+    gpu: &GpuContext,
+    splats: &Splats,
+    particles: &mut Particles,
+    offset: usize,
+    amount: f64,
+    r: &mut impl FnMut() -> f32,
+    shading: Option<Vec<[u32; 2]>>,
+) -> GpuRenderer {
     for f in &mut particles.f {
         *f =
             DMat3::from_quat(DQuat::from_xyzw(r().into(), r().into(), r().into(), 1.0).normalize())
@@ -74,6 +90,20 @@ fn deform_and_derive(
     .unwrap();
     let mut renderer = GpuRenderer::new(gpu);
     renderer.upload(gpu, splats).unwrap();
+    if let Some(shading) = shading {
+        renderer
+            .set_lighting(
+                gpu,
+                &LightingSetup {
+                    ambient: Vec3::ONE,
+                    materials: vec![ShadingParams::default()],
+                    shading,
+                    shadows: None,
+                    max_lights: 1,
+                },
+            )
+            .unwrap();
+    }
     Derive::new(gpu, &sim, &renderer, splats, offset as u32)
         .unwrap()
         .run(gpu)
@@ -332,4 +362,69 @@ fn exported_ply_renders_like_the_deformed_state() {
         wrong < psnr - 5.0,
         "the SH rotation should matter: {wrong} vs {psnr}"
     );
+}
+
+/// With relighting on, the derive pass also moves each simulated Gaussian's normal as a
+/// covector, n = F⁻ᵀ n₀ (normalised): checked against the f64 twin `derive_normal` for
+/// random deformations; static Gaussians keep their normals.
+#[test]
+fn derive_transports_normals_with_the_inverse_transpose() {
+    for gpu in splatter::gpu::test_contexts() {
+        let mut rng = SplitMix64::new(9);
+        let mut r = move || rng.range(-1.0, 1.0);
+        let (n, offset) = (300, 50);
+        let mut splats = Splats {
+            sh_degree: 0,
+            ..Default::default()
+        };
+        let mut shading = Vec::new();
+        for _ in 0..n {
+            splats
+                .means
+                .push(Vec3::new(r(), r(), r()) * 0.3 + Vec3::splat(0.5));
+            splats.covariances.push([1e-4, 0.0, 0.0, 1e-4, 0.0, 1e-4]);
+            splats.rotations.push(Quat::IDENTITY);
+            splats.opacities.push(0.9);
+            splats.sh.extend([0.0, 0.0, 0.0]);
+            shading.push([oct_encode(Vec3::new(r(), r(), r()).normalize()), 0]);
+        }
+        let mut particles = particles_for(&splats, offset, 1000.0, 1e-6);
+        let renderer = deform_and_derive_lit(
+            &gpu,
+            &splats,
+            &mut particles,
+            offset,
+            0.3,
+            &mut r,
+            Some(shading.clone()),
+        );
+        let buffer = renderer.shading_buffer().unwrap();
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size: buffer.size(),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
+        gpu.queue.submit([enc.finish()]);
+        let got: Vec<[u32; 2]> =
+            bytemuck::pod_collect_to_vec(&read_buffer(&gpu, &staging).unwrap());
+        let mut worst = 0.0f64;
+        for p in 0..n {
+            if p < offset {
+                assert_eq!(got[p], shading[p], "static Gaussians keep their normals");
+                continue;
+            }
+            let n0 = oct_decode(shading[p][0]).as_dvec3();
+            let want = derive_normal(particles.f[p - offset], n0);
+            let have = oct_decode(got[p][0]).as_dvec3();
+            worst = worst.max(have.dot(want).clamp(-1.0, 1.0).acos().to_degrees());
+        }
+        eprintln!(
+            "{}: transported normals within {worst:.3}° of F⁻ᵀ n₀",
+            gpu.describe()
+        );
+        assert!(worst < 0.1, "worst {worst}°");
+    }
 }

@@ -68,6 +68,21 @@ fn oct_decode(bits: u32) -> vec3<f32> {
     return normalize(vec3<f32>(xy, z));
 }
 
+// `relight::oct_encode`: a unit normal onto the octahedron, two 16-bit snorms.
+fn oct_encode(n: vec3<f32>) -> u32 {
+    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    if !(l1 > 0.0) {
+        return NO_NORMAL;
+    }
+    let p = n.xy / l1;
+    var e = p;
+    if n.z < 0.0 {
+        let sgn = select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+        e = (vec2<f32>(1.0) - abs(p.yx)) * sgn;
+    }
+    return pack2x16snorm(clamp(e, vec2<f32>(-1.0), vec2<f32>(1.0)));
+}
+
 fn voxel_index(v: vec3<u32>, res: vec3<u32>) -> u32 {
     return v.x + res.x * (v.y + res.y * v.z);
 }

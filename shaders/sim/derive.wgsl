@@ -2,13 +2,16 @@
 // straight into the renderer's Gaussian buffer: mean x_p, covariance F A Fᵀ (A the rest
 // covariance in world space), and the rest-frame rotation composed with the rotation of
 // F's polar decomposition (SH are then evaluated along that frame). Opacity and SH are
-// unchanged. Mirrors `sim::derive::derive_gaussian`.
+// unchanged. With relighting on, the normal too: n = F⁻ᵀ n₀ normalised (normals are
+// covectors; the cofactor matrix det(F)·F⁻ᵀ avoids the division), written into the
+// renderer's shading records. Mirrors `sim::derive::derive_gaussian` and `derive_normal`.
 
 struct DeriveParams {
     // index of the first simulated Gaussian in the renderer's buffer
     offset: u32,
     count: u32,
-    _pad0: u32,
+    // 1: write normals into `shading`
+    normals: u32,
     _pad1: u32,
 }
 
@@ -16,7 +19,7 @@ struct DeriveParams {
 struct RestGaussian {
     // rest covariance upper triangle: xx, xy, xz, yy
     cov_a: vec4<f32>,
-    // yz, zz, opacity, unused
+    // yz, zz, opacity, and the rest normal packed by `relight::oct_encode` (as bits)
     cov_b: vec4<f32>,
     // rest-frame rotation (x, y, z, w)
     rotation: vec4<f32>,
@@ -27,6 +30,10 @@ struct RestGaussian {
 @group(0) @binding(2) var<storage, read> deformation: array<mat3x3<f32>>;
 @group(0) @binding(3) var<storage, read> rest: array<RestGaussian>;
 @group(0) @binding(4) var<storage, read_write> gaussians: array<GaussianIn>;
+// The renderer's shading records (x: packed normal, y: material); a stand-in when off.
+@group(0) @binding(5) var<storage, read_write> shading: array<vec2<u32>>;
+
+
 
 // Unit quaternion (x, y, z, w) of a rotation matrix (Shepperd's method: divide by the
 // largest of the four candidates). m[c][r] is row r, column c.
@@ -71,6 +78,15 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let f = deformation[p];
     let c = f * a * transpose(f);
     let rot = quat_mul(quat_from_rotation(polar_rotation(f)), r.rotation);
+    if params.normals == 1u {
+        let bits = bitcast<u32>(r.cov_b.w);
+        var packed = NO_NORMAL;
+        if bits != NO_NORMAL {
+            let cof = mat3x3<f32>(cross(f[1], f[2]), cross(f[2], f[0]), cross(f[0], f[1]));
+            packed = oct_encode(cof * oct_decode(bits));
+        }
+        shading[params.offset + p].x = packed;
+    }
     gaussians[params.offset + p] = GaussianIn(
         vec4<f32>(x_mass[p].xyz, r.cov_b.z),
         vec4<f32>(c[0][0], c[1][0], c[2][0], c[1][1]),

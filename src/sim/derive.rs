@@ -20,7 +20,9 @@ use crate::render::{GpuRenderer, Splats};
 pub struct DeriveParams {
     pub offset: u32,
     pub count: u32,
-    pub _pad: [u32; 2],
+    /// 1: write the transported normals into the renderer's shading records.
+    pub normals: u32,
+    pub _pad: u32,
 }
 
 /// `RestGaussian` of the shader: a particle's Gaussian at rest (world space).
@@ -43,13 +45,19 @@ pub fn derive_gaussian(x: DVec3, f: DMat3, a: DMat3, r0: DQuat) -> (DVec3, DMat3
     )
 }
 
+/// The deformed normal of a Gaussian with rest normal `n0` (SPEC §8): n = F⁻ᵀ n₀,
+/// normalised (the twin of the normal transport in `shaders/sim/derive.wgsl`).
+pub fn derive_normal(f: DMat3, n0: DVec3) -> DVec3 {
+    (f.inverse().transpose() * n0).normalize()
+}
+
 /// The derive pass for one simulation whose particles are the Gaussians
 /// `offset .. offset + sim.len()` of the renderer's buffer.
 pub struct Derive {
     kernel: Kernel,
     bind: wgpu::BindGroup,
     count: u32,
-    _buffers: [wgpu::Buffer; 2],
+    _buffers: [wgpu::Buffer; 3],
 }
 
 impl Derive {
@@ -72,13 +80,16 @@ impl Derive {
                     "derive: Gaussians {offset}..{end} are not all uploaded to the renderer"
                 ))
             })?;
+        // With relighting on, the rest normals ride in cov_b.w (as bits).
+        let rest_shading = renderer.rest_shading();
         let rest: Vec<RestGaussian> = (offset as usize..end)
             .map(|i| {
+                let normal = rest_shading.map_or(0, |s| s[i][0]);
                 let c: Sym3 = splats.covariances[i];
                 let q = splats.rotations[i];
                 RestGaussian {
                     cov_a: [c[0], c[1], c[2], c[3]],
-                    cov_b: [c[4], c[5], splats.opacities[i], 0.0],
+                    cov_b: [c[4], c[5], splats.opacities[i], f32::from_bits(normal)],
                     rotation: [q.x, q.y, q.z, q.w],
                 }
             })
@@ -89,7 +100,8 @@ impl Derive {
             contents: bytemuck::bytes_of(&DeriveParams {
                 offset,
                 count,
-                _pad: [0; 2],
+                normals: u32::from(rest_shading.is_some()),
+                _pad: 0,
             }),
             usage: wgpu::BufferUsages::UNIFORM,
         });
@@ -102,12 +114,22 @@ impl Derive {
         });
         let kernel = Kernel::new(device, "derive", &source(), "main");
         let (x_mass, deformation) = sim.state_buffers();
-        let bind = kernel.bind(device, &[&params, x_mass, deformation, &rest, target]);
+        let stand_in = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("derive no shading"),
+            size: 256,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let shading = renderer.shading_buffer().unwrap_or(&stand_in);
+        let bind = kernel.bind(
+            device,
+            &[&params, x_mass, deformation, &rest, target, shading],
+        );
         Ok(Derive {
             kernel,
             bind,
             count,
-            _buffers: [params, rest],
+            _buffers: [params, rest, stand_in],
         })
     }
 
@@ -129,6 +151,7 @@ impl Derive {
 fn source() -> String {
     [
         crate::render::gpu::COMMON,
+        crate::render::gpu::lighting::LIGHTING,
         super::wgsl::library().as_str(),
         include_str!("../../shaders/sim/derive.wgsl"),
     ]

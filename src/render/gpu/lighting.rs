@@ -71,6 +71,8 @@ pub(crate) struct Lighting {
     pub ambient: Vec3,
     pub frame_lights: Vec<PointLight>,
     pub max_lights: usize,
+    /// The shading records as uploaded (rest normals of simulated Gaussians for derive).
+    pub rest_shading: Vec<[u32; 2]>,
 }
 
 fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
@@ -159,6 +161,7 @@ impl Lighting {
             ambient: setup.ambient,
             frame_lights: Vec::new(),
             max_lights,
+            rest_shading: setup.shading.clone(),
         })
     }
 

@@ -239,6 +239,12 @@ impl GpuRenderer {
         self.lighting.as_ref().map(|l| &l.shading)
     }
 
+    /// The shading records given to [`set_lighting`](Self::set_lighting) (packed rest
+    /// normal, material per Gaussian), if lighting is set.
+    pub fn rest_shading(&self) -> Option<&[[u32; 2]]> {
+        self.lighting.as_ref().map(|l| l.rest_shading.as_slice())
+    }
+
     /// The uploaded Gaussians on the GPU (`layout::GaussianIn` records): a simulation's
     /// derive pass writes the deformed Gaussians here, so frames need no CPU round trip.
     pub fn gaussian_buffer(&self) -> Option<&wgpu::Buffer> {
