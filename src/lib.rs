@@ -5,7 +5,10 @@
 //! (tile-based splatting, GPU) → PNG frames (writer thread).
 
 pub mod bench;
+pub mod checkpoint;
+pub mod farm;
 pub mod gpu;
+pub mod limits;
 pub mod output;
 pub mod relight;
 pub mod render;

@@ -1,20 +1,23 @@
 //! The `splatter` command line. Errors end as one `error: …` line and a non-zero exit.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 
+use splatter::checkpoint::{self, checkpoint_path, Checkpoint};
 use splatter::gpu::{BackendChoice, GpuContext};
+use splatter::limits;
+use splatter::output::manifest::{manifest_path, FrameTiming, Manifest, ManifestWriter, Settings};
 use splatter::output::{frame_path, FrameWriter, Progress};
 use splatter::render::GpuRenderer;
 use splatter::scene::simulation::SimulationSetup;
 use splatter::scene::{self, BuildReport, CameraPath, Scene};
 use splatter::sim::derive::Derive;
-use splatter::sim::gpu::{GpuSim, Watchdog};
+use splatter::sim::gpu::{GpuSim, P2gPath, Watchdog};
 
 #[derive(Parser)]
 #[command(
@@ -34,7 +37,7 @@ struct Cli {
 enum Command {
     /// Render a scene file (or, with --ply, a PLY file) to DIR/frame_00000.png, …
     /// Without a scene and without --ply, renders the embedded default scene.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// List the GPU adapters, their optional features and limits.
     Info,
     /// Print the JSON Schema of scene files.
@@ -106,6 +109,27 @@ struct RenderArgs {
     /// With --cameras: index of the camera in cameras.json (default 0).
     #[arg(long, requires = "cameras")]
     camera: Option<usize>,
+    /// Continue a killed or failed run in the same output directory: frames already
+    /// written are skipped, and a simulation restarts from OUT_DIR/checkpoint.bin (a
+    /// checkpoint of another scene, mode or program version is refused).
+    #[arg(long)]
+    resume: bool,
+    /// Bit-identical frames for the same input on the same adapter: the simulation sums
+    /// P2G in a fixed order (sorted gather) instead of with float atomics.
+    #[arg(long)]
+    deterministic: bool,
+    /// Save the simulation state to OUT_DIR/checkpoint.bin every N frames (0: never).
+    #[arg(long, value_name = "N", default_value_t = 10)]
+    checkpoint_every: u32,
+    /// Render-only: take each frame's Gaussians from DIR/frame_NNNNN.ply (as written by
+    /// --export-ply) instead of building and simulating the scene; the scene gives the
+    /// camera path and output settings. For splitting frame ranges over machines.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply"])]
+    from_states: Option<PathBuf>,
+    /// After rendering, assemble the frames into a video with ffmpeg (which must be on
+    /// the PATH; checked before rendering starts).
+    #[arg(long, value_name = "FILE")]
+    video: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -143,7 +167,7 @@ fn one_line(e: &anyhow::Error) -> String {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         None => render(cli.backend, RenderArgs::default_scene()),
-        Some(Command::Render(args)) => render(cli.backend, args),
+        Some(Command::Render(args)) => render(cli.backend, *args),
         Some(Command::Info) => {
             print!("{}", splatter::gpu::info_report(cli.backend));
             Ok(())
@@ -199,6 +223,11 @@ impl RenderArgs {
             ply: None,
             cameras: None,
             camera: None,
+            resume: false,
+            deterministic: false,
+            checkpoint_every: 10,
+            from_states: None,
+            video: None,
         }
     }
 }
@@ -348,36 +377,109 @@ fn prepare_quick_look(
 }
 
 fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
+    if args.from_states.is_some() {
+        return render_from_states(backend, args);
+    }
     let started = Instant::now();
+    let ffmpeg = video_preflight(&args)?;
     let (scene, path, splats, report) = prepare(&args)?;
     let frames = frame_range(args.frames.as_deref(), scene.frame_count())?;
+    let gpu = GpuContext::new(backend)?;
+    let (width, height) = (scene.output.width, scene.output.height);
+    let simulated = scene.objects.iter().any(|o| o.physics.is_some());
+    if let (Some(spec), true) = (&scene.simulation, simulated) {
+        // The grid's GPU size before the simulation setup allocates it on the CPU.
+        let (lo, hi) = (DVec3::from(spec.domain.lo), DVec3::from(spec.domain.hi));
+        let cells = ((hi - lo) / spec.dx - 1e-9).ceil().max(DVec3::ONE);
+        if cells.is_finite() && cells.max_element() < f64::from(u32::MAX) {
+            limits::check_gpu(&gpu, &limits::sim_needs(0, cells.as_uvec3()))?;
+        }
+    }
     let setup = scene::simulation::prepare(&scene, splats.clone(), &report)?;
+    let hash = checkpoint::scene_hash(&scene, &splats, setup.as_ref());
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
     std::fs::create_dir_all(&dir)
         .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
-
-    let gpu = GpuContext::new(backend)?;
+    if let Some(dir) = &args.export_ply {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the PLY export directory {}", dir.display()))?;
+    }
     eprintln!("adapter: {}", gpu.describe());
+    let mut needs = limits::render_needs(splats.len(), width, height);
+    if let Some(s) = &setup {
+        needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
+    }
+    limits::check_gpu(&gpu, &needs)?;
+    if args.resume {
+        check_manifest_for_resume(&dir, hash)?;
+    }
+    let done = |frame: u32| frame_done(&dir, args.export_ply.as_deref(), frame);
+    let first_missing = if args.resume {
+        frames.clone().find(|f| !done(*f))
+    } else {
+        Some(frames.start)
+    };
+    let path_p2g = if args.deterministic {
+        P2gPath::Gather
+    } else {
+        P2gPath::best(&gpu)
+    };
+    // A checkpoint helps only if it is not past the first frame still to render.
+    let checkpoint_file = checkpoint_path(&dir);
+    let resume_state = match (&setup, first_missing) {
+        (Some(s), Some(missing)) if args.resume && checkpoint_file.exists() => {
+            let cp = Checkpoint::load(&checkpoint_file)?;
+            cp.check_matches(
+                &checkpoint_file,
+                hash,
+                args.deterministic,
+                s.particles.len(),
+                s.steps_per_frame,
+            )?;
+            if cp.frame <= missing {
+                Some(cp)
+            } else {
+                eprintln!(
+                    "resume: the checkpoint is at frame {}, after frame {missing} which is missing; simulating from frame 0",
+                    cp.frame
+                );
+                None
+            }
+        }
+        _ => None,
+    };
+    if args.resume {
+        match (first_missing, &resume_state) {
+            (None, _) => eprintln!(
+                "resume: frames {}..{} are all written already",
+                frames.start, frames.end
+            ),
+            (Some(m), Some(cp)) => eprintln!(
+                "resume: continuing from the checkpoint at frame {} (first missing frame {m})",
+                cp.frame
+            ),
+            (Some(m), None) => eprintln!("resume: first missing frame {m}"),
+        }
+    }
     eprintln!(
         "scene: {} Gaussians, {}×{}, frames {}..{} → {}",
         splats.len(),
-        scene.output.width,
-        scene.output.height,
+        width,
+        height,
         frames.start,
         frames.end,
         dir.display()
     );
     let mut renderer = GpuRenderer::new(&gpu);
     renderer.upload(&gpu, &splats)?;
-    let background = Vec3::from(scene.output.background);
     let sim = match &setup {
         Some(s) => {
             for w in &s.warnings {
                 log::warn!("{w}");
             }
             eprintln!(
-                "simulation: {} particles, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame",
+                "simulation: {} particles, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame, P2G {}{}",
                 s.particles.len(),
                 s.materials.len(),
                 s.grid.cells.x,
@@ -385,19 +487,50 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                 s.grid.cells.z,
                 s.grid.dx,
                 s.params.dt,
-                s.steps_per_frame
+                s.steps_per_frame,
+                p2g_name(path_p2g),
+                if args.deterministic { " (deterministic)" } else { "" }
             );
-            let gpu_sim = GpuSim::new(&gpu, &s.particles, &s.grid, &s.materials, &s.params)?;
+            let restored;
+            let start = match &resume_state {
+                Some(cp) => {
+                    restored = cp.to_particles(&s.particles);
+                    &restored
+                }
+                None => &s.particles,
+            };
+            let gpu_sim =
+                GpuSim::with_path(&gpu, start, &s.grid, &s.materials, &s.params, path_p2g)?;
             let derive = Derive::new(&gpu, &gpu_sim, &renderer, &s.splats, s.static_count as u32)?;
             Some((gpu_sim, derive, s))
         }
         None => None,
     };
 
-    if let Some(dir) = &args.export_ply {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create the PLY export directory {}", dir.display()))?;
-    }
+    let settings = Settings {
+        width,
+        height,
+        fps: scene.output.fps,
+        frames: [frames.start, frames.end],
+        scene_frames: scene.frame_count(),
+        deterministic: args.deterministic,
+        gaussians: splats.len(),
+        particles: setup.as_ref().map(|s| s.particles.len()),
+        p2g: setup.as_ref().map(|_| p2g_name(path_p2g).to_string()),
+        steps_per_frame: setup.as_ref().map(|s| s.steps_per_frame),
+        dt: setup.as_ref().map(|s| s.params.dt),
+        checkpoint_every: if setup.is_some() {
+            args.checkpoint_every
+        } else {
+            0
+        },
+        resumed_from: resume_state.as_ref().map(|cp| cp.frame),
+        from_states: None,
+        export_ply: args.export_ply.clone(),
+    };
+    let mut manifest = new_manifest(&args, &dir, hash, &gpu, settings, started);
+    manifest.write_now()?;
+
     let rotator = args
         .export_ply
         .as_ref()
@@ -407,51 +540,356 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let mut progress = Progress::new(u64::from(frames.end - frames.start), "render");
     let render_start = Instant::now();
     let mut gpu_ms = 0.0;
-    // Frame f shows the state after f · steps_per_frame steps; a range that starts later
-    // simulates the frames before it without rendering them.
-    let first = if sim.is_some() { 0 } else { frames.start };
-    for frame in first..frames.end {
-        if let Some((gpu_sim, derive, s)) = &sim {
-            if frame > 0 {
-                gpu_sim.step(&gpu, s.steps_per_frame)?;
+    let mut rendered = 0u32;
+    let background = Vec3::from(scene.output.background);
+    let fail_at = fail_hook_frame()?;
+    let sim_first = resume_state.as_ref().map_or(0, |cp| cp.frame);
+    let mut run_frames = || -> Result<()> {
+        let Some(_) = first_missing else {
+            return Ok(());
+        };
+        // Frame f shows the state after f · steps_per_frame steps; a range that starts
+        // later simulates the frames before it without rendering them.
+        let first = if sim.is_some() {
+            sim_first
+        } else {
+            frames.start
+        };
+        for frame in first..frames.end {
+            if fail_at == Some(frame) {
+                eprintln!("SPLATTER_FAIL_AT_FRAME: exiting abruptly before frame {frame}");
+                std::process::exit(FAIL_HOOK_EXIT);
             }
-            let w = gpu_sim.take_watchdog(&gpu)?;
-            if w.nonfinite > 0 || w.escaped > 0 {
-                bail!("{}", watchdog_message(frame, w, s));
-            }
-            if frame < frames.start {
+            let t0 = Instant::now();
+            let mut timing = FrameTiming::default();
+            if let Some((gpu_sim, derive, s)) = &sim {
+                if frame > sim_first {
+                    gpu_sim.step(&gpu, s.steps_per_frame)?;
+                }
+                let w = gpu_sim.take_watchdog(&gpu)?;
+                if w.nonfinite > 0 || w.escaped > 0 {
+                    bail!("{}", watchdog_message(frame, w, s));
+                }
+                if args.checkpoint_every > 0
+                    && frame > sim_first
+                    && frame % args.checkpoint_every == 0
+                {
+                    // Frames before this one reach the disk first, so a crash after the
+                    // checkpoint never loses a frame that resuming from it would skip.
+                    writer.flush()?;
+                    let state = gpu_sim.read_particles(&gpu, &s.particles)?;
+                    Checkpoint::from_particles(
+                        &state,
+                        hash,
+                        args.deterministic,
+                        frame,
+                        s.steps_per_frame,
+                    )
+                    .save(&checkpoint_file)?;
+                    manifest.write_now()?;
+                }
+                timing.simulate_ms = t0.elapsed().as_secs_f64() * 1e3;
+                if frame < frames.start {
+                    continue;
+                }
+                if args.resume && done(frame) {
+                    progress.frame_done();
+                    continue;
+                }
+                derive.run(&gpu)?;
+            } else if args.resume && done(frame) {
+                progress.frame_done();
                 continue;
             }
-            derive.run(&gpu)?;
+            let t1 = Instant::now();
+            if let (Some(dir), Some(rotator)) = (&args.export_ply, &rotator) {
+                let gaussians = renderer.read_gaussians(&gpu)?;
+                splatter::output::export::export_frame(dir, frame, &gaussians, &splats, rotator)?;
+            }
+            let camera = path.camera(frame);
+            let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;
+            gpu_ms += timings.render_ms + timings.readback_ms;
+            writer.submit(
+                frame_path(&dir, frame),
+                image.width,
+                image.height,
+                image.rgba,
+            )?;
+            timing.render_ms = t1.elapsed().as_secs_f64() * 1e3;
+            timing.gpu_ms = timings.render_ms + timings.readback_ms;
+            manifest.frame_done(frame, timing)?;
+            rendered += 1;
+            progress.frame_done();
         }
-        if let (Some(dir), Some(rotator)) = (&args.export_ply, &rotator) {
-            let gaussians = renderer.read_gaussians(&gpu)?;
-            splatter::output::export::export_frame(dir, frame, &gaussians, &splats, rotator)?;
-        }
-        let camera = path.camera(frame);
-        let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;
-        gpu_ms += timings.render_ms + timings.readback_ms;
-        writer.submit(
-            frame_path(&dir, frame),
-            image.width,
-            image.height,
-            image.rgba,
-        )?;
-        progress.frame_done();
+        Ok(())
+    };
+    let result = run_frames();
+    finish_run(
+        result,
+        writer,
+        &progress,
+        &mut manifest,
+        ffmpeg,
+        &args,
+        &dir,
+        frames,
+        scene.output.fps,
+    )?;
+    report_done(rendered, render_start, gpu_ms, workers, started);
+    Ok(())
+}
+
+/// The exit status of the `SPLATTER_FAIL_AT_FRAME` test hook.
+const FAIL_HOOK_EXIT: i32 = 86;
+
+/// Test hook: `SPLATTER_FAIL_AT_FRAME=k` makes a render exit abruptly (status 86, frames in
+/// the writer queue lost, no cleanup) just before frame k, as a crash or `kill -9` would.
+/// Used by the resume tests; see docs/testing.md.
+fn fail_hook_frame() -> Result<Option<u32>> {
+    match std::env::var("SPLATTER_FAIL_AT_FRAME") {
+        Ok(v) => Ok(Some(v.trim().parse().with_context(|| {
+            format!("SPLATTER_FAIL_AT_FRAME={v:?}: expected a frame number")
+        })?)),
+        Err(_) => Ok(None),
     }
-    let encode = writer.finish()?;
+}
+
+fn p2g_name(path: P2gPath) -> &'static str {
+    match path {
+        P2gPath::Gather => "gather",
+        P2gPath::Atomic => "atomic",
+    }
+}
+
+/// A frame counts as done for `--resume` when its PNG (and, with --export-ply, its PLY)
+/// exists: both are written to a temporary name and renamed, so existing means complete.
+fn frame_done(dir: &Path, export_ply: Option<&Path>, frame: u32) -> bool {
+    frame_path(dir, frame).is_file()
+        && export_ply.is_none_or(|d| splatter::output::export::frame_ply_path(d, frame).is_file())
+}
+
+/// `--resume` into a folder whose manifest names another scene is refused (its frames
+/// would be mixed with this scene's).
+fn check_manifest_for_resume(dir: &Path, hash: u64) -> Result<()> {
+    let path = manifest_path(dir);
+    if let Some(m) = Manifest::read(&path) {
+        let ours = format!("{hash:016x}");
+        if m.scene_hash != ours {
+            bail!(
+                "--resume: {} is the manifest of a run of a different scene (scene hash {}, this run {ours}): the scene file, a file it loads, or --width/--height changed since; render into another --out, or run without --resume to start over",
+                path.display(),
+                m.scene_hash
+            );
+        }
+    }
+    Ok(())
+}
+
+fn new_manifest(
+    args: &RenderArgs,
+    dir: &Path,
+    hash: u64,
+    gpu: &GpuContext,
+    settings: Settings,
+    started: Instant,
+) -> ManifestWriter {
+    let scene_name = match (&args.scene, &args.ply) {
+        (Some(p), _) => p.display().to_string(),
+        (None, Some(p)) => format!("--ply {}", p.display()),
+        (None, None) => "<default scene>".into(),
+    };
+    let mut m = Manifest::new(scene_name, hash, gpu.describe(), settings);
+    if args.resume {
+        // Keep the timings of the frames an earlier run of the same scene rendered.
+        if let Some(old) = Manifest::read(&manifest_path(dir)) {
+            if old.scene_hash == m.scene_hash {
+                m.frames = old.frames;
+            }
+        }
+    }
+    ManifestWriter::new(dir, m, started)
+}
+
+/// `--video`: a plausible name and ffmpeg on the PATH, before any rendering.
+fn video_preflight(args: &RenderArgs) -> Result<Option<PathBuf>> {
+    match &args.video {
+        Some(v) => Ok(Some(splatter::output::video::preflight(v)?)),
+        None => Ok(None),
+    }
+}
+
+/// After the frame loop: wait for the writer, record the outcome in the manifest, and
+/// assemble the video.
+#[allow(clippy::too_many_arguments)]
+fn finish_run(
+    result: Result<()>,
+    writer: FrameWriter,
+    progress: &Progress,
+    manifest: &mut ManifestWriter,
+    ffmpeg: Option<PathBuf>,
+    args: &RenderArgs,
+    dir: &Path,
+    frames: std::ops::Range<u32>,
+    fps: f32,
+) -> Result<()> {
+    let result = result.and_then(|()| writer.finish().map(|_| ()).map_err(Into::into));
     progress.finish();
-    let n = f64::from(frames.end - frames.start);
+    if let Err(e) = result {
+        // The run's error is what matters; a manifest that cannot be written (a full
+        // disk) must not hide it.
+        let _ = manifest.finish(Some(one_line(&e)));
+        return Err(e);
+    }
+    if let (Some(ffmpeg), Some(video)) = (ffmpeg, &args.video) {
+        eprintln!("video: {} (ffmpeg)", video.display());
+        if let Err(e) = splatter::output::video::assemble(&ffmpeg, dir, frames, fps, video) {
+            let e = anyhow::Error::from(e);
+            let _ = manifest.finish(Some(one_line(&e)));
+            return Err(e);
+        }
+    }
+    manifest.finish(None)?;
+    Ok(())
+}
+
+fn report_done(
+    rendered: u32,
+    render_start: Instant,
+    gpu_ms: f64,
+    workers: usize,
+    started: Instant,
+) {
+    let n = f64::from(rendered.max(1));
     let wall = render_start.elapsed().as_secs_f64();
     eprintln!(
-        "done: {} frames in {:.2} s ({:.3} s/frame; GPU render+readback {:.1} ms/frame, PNG encoding {:.1} ms/frame on {} worker thread(s)); total {:.2} s with scene build",
-        n,
+        "done: {} frames rendered in {:.2} s ({:.3} s/frame; GPU render+readback {:.1} ms/frame; {} PNG worker thread(s)); total {:.2} s with scene build",
+        rendered,
         wall,
         wall / n,
         gpu_ms / n,
-        encode.as_secs_f64() * 1e3 / n,
         workers,
         started.elapsed().as_secs_f64()
     );
+}
+
+/// `--from-states DIR`: each frame's Gaussians from DIR/frame_NNNNN.ply, rendered with the
+/// scene's camera and output settings; no build, no simulation.
+fn render_from_states(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
+    let started = Instant::now();
+    let states = args.from_states.clone().expect("--from-states given");
+    let ffmpeg = video_preflight(&args)?;
+    for (flag, value) in [("--width", args.width), ("--height", args.height)] {
+        if let Some(v) = value {
+            if !(1..=scene::MAX_IMAGE_SIZE).contains(&v) {
+                bail!(
+                    "{flag} {v}: expected an image size in pixels in 1..={}",
+                    scene::MAX_IMAGE_SIZE
+                );
+            }
+        }
+    }
+    let mut scene = match &args.scene {
+        Some(path) => scene::load(path)?,
+        None => scene::default_scene(),
+    };
+    scene.with_overrides(args.out.clone(), args.width, args.height)?;
+    let path = scene.camera_path()?;
+    let frames = frame_range(args.frames.as_deref(), scene.frame_count())?;
+    splatter::farm::check_states(&states, frames.clone())?;
+    // The scene's settings only: its objects come from the states.
+    let hash = checkpoint::scene_hash(&scene, &splatter::render::Splats::default(), None);
+    let dir = scene.output_dir();
+    std::fs::create_dir_all(&dir)
+        .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    let gpu = GpuContext::new(backend)?;
+    eprintln!("adapter: {}", gpu.describe());
+    let (width, height) = (scene.output.width, scene.output.height);
+    limits::check_gpu(&gpu, &limits::render_needs(0, width, height))?;
+    if args.resume {
+        check_manifest_for_resume(&dir, hash)?;
+    }
+    eprintln!(
+        "states: {}, {}×{}, frames {}..{} → {}",
+        states.display(),
+        width,
+        height,
+        frames.start,
+        frames.end,
+        dir.display()
+    );
+    let settings = Settings {
+        width,
+        height,
+        fps: scene.output.fps,
+        frames: [frames.start, frames.end],
+        scene_frames: scene.frame_count(),
+        deterministic: args.deterministic,
+        from_states: Some(states.clone()),
+        ..Default::default()
+    };
+    let mut manifest = new_manifest(&args, &dir, hash, &gpu, settings, started);
+    manifest.write_now()?;
+    let mut renderer = GpuRenderer::new(&gpu);
+    let background = Vec3::from(scene.output.background);
+    let workers = FrameWriter::default_workers();
+    let mut writer = FrameWriter::new(workers, 2 * workers);
+    let mut progress = Progress::new(u64::from(frames.end - frames.start), "render");
+    let render_start = Instant::now();
+    let (mut gpu_ms, mut rendered) = (0.0, 0u32);
+    let fail_at = fail_hook_frame()?;
+    let mut run_frames = || -> Result<()> {
+        for frame in frames.clone() {
+            if fail_at == Some(frame) {
+                eprintln!("SPLATTER_FAIL_AT_FRAME: exiting abruptly before frame {frame}");
+                std::process::exit(FAIL_HOOK_EXIT);
+            }
+            if args.resume && frame_done(&dir, None, frame) {
+                progress.frame_done();
+                continue;
+            }
+            let t0 = Instant::now();
+            let (splats, skipped) = splatter::farm::load_state(&states, frame)?;
+            if skipped > 0 {
+                log::warn!("frame {frame}: {skipped} NaN or degenerate Gaussians in its state were skipped");
+            }
+            limits::check_gpu(&gpu, &limits::render_needs(splats.len(), width, height))?;
+            renderer.upload(&gpu, &splats)?;
+            let load_ms = t0.elapsed().as_secs_f64() * 1e3;
+            let t1 = Instant::now();
+            let (image, timings) = renderer.render_timed(&gpu, &path.camera(frame), background)?;
+            gpu_ms += timings.render_ms + timings.readback_ms;
+            writer.submit(
+                frame_path(&dir, frame),
+                image.width,
+                image.height,
+                image.rgba,
+            )?;
+            manifest.frame_done(
+                frame,
+                FrameTiming {
+                    simulate_ms: 0.0,
+                    load_ms: Some(load_ms),
+                    render_ms: t1.elapsed().as_secs_f64() * 1e3,
+                    gpu_ms: timings.render_ms + timings.readback_ms,
+                },
+            )?;
+            rendered += 1;
+            progress.frame_done();
+        }
+        Ok(())
+    };
+    let result = run_frames();
+    finish_run(
+        result,
+        writer,
+        &progress,
+        &mut manifest,
+        ffmpeg,
+        &args,
+        &dir,
+        frames,
+        scene.output.fps,
+    )?;
+    report_done(rendered, render_start, gpu_ms, workers, started);
     Ok(())
 }

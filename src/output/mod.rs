@@ -3,12 +3,14 @@
 //! progress display.
 
 pub mod export;
+pub mod manifest;
 mod progress;
+pub mod video;
 
 pub use progress::Progress;
 
 use std::path::{Path, PathBuf};
-use std::sync::{mpsc, Arc, Mutex};
+use std::sync::{mpsc, Arc, Condvar, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -103,6 +105,9 @@ struct Job {
 pub struct FrameWriter {
     tx: Option<mpsc::SyncSender<Job>>,
     workers: Vec<JoinHandle<Result<Duration, OutputError>>>,
+    /// Jobs finished (written or failed), for [`flush`](Self::flush).
+    done: Arc<(Mutex<u64>, Condvar)>,
+    submitted: u64,
 }
 
 impl FrameWriter {
@@ -110,9 +115,11 @@ impl FrameWriter {
     pub fn new(workers: usize, depth: usize) -> FrameWriter {
         let (tx, rx) = mpsc::sync_channel::<Job>(depth);
         let rx = Arc::new(Mutex::new(rx));
+        let done = Arc::new((Mutex::new(0u64), Condvar::new()));
         let workers = (0..workers.max(1))
             .map(|_| {
                 let rx = Arc::clone(&rx);
+                let done = Arc::clone(&done);
                 std::thread::spawn(move || {
                     let mut busy = Duration::ZERO;
                     loop {
@@ -120,8 +127,12 @@ impl FrameWriter {
                         let job = rx.lock().unwrap_or_else(|p| p.into_inner()).recv();
                         let Ok(job) = job else { return Ok(busy) };
                         let start = Instant::now();
-                        write_png(&job.path, job.width, job.height, &job.rgba)?;
+                        let written = write_png(&job.path, job.width, job.height, &job.rgba);
                         busy += start.elapsed();
+                        let (count, cv) = &*done;
+                        *count.lock().unwrap_or_else(|p| p.into_inner()) += 1;
+                        cv.notify_all();
+                        written?;
                     }
                 })
             })
@@ -129,6 +140,8 @@ impl FrameWriter {
         FrameWriter {
             tx: Some(tx),
             workers,
+            done,
+            submitted: 0,
         }
     }
 
@@ -161,6 +174,29 @@ impl FrameWriter {
             })
             .is_err()
         {
+            return Err(self.join().err().unwrap_or(OutputError::WriterGone));
+        }
+        self.submitted += 1;
+        Ok(())
+    }
+
+    /// Wait until every frame queued so far is on disk (or failed: then that error), while
+    /// keeping the workers for more frames. A checkpoint is saved only after a flush, so the
+    /// frames before it are never lost to a crash.
+    pub fn flush(&mut self) -> Result<(), OutputError> {
+        let (count, cv) = &*self.done;
+        let mut done = count.lock().unwrap_or_else(|p| p.into_inner());
+        while *done < self.submitted {
+            if self.workers.iter().any(|w| w.is_finished()) {
+                break;
+            }
+            done = cv
+                .wait_timeout(done, Duration::from_millis(100))
+                .unwrap_or_else(|p| p.into_inner())
+                .0;
+        }
+        drop(done);
+        if self.workers.iter().any(|w| w.is_finished()) {
             return Err(self.join().err().unwrap_or(OutputError::WriterGone));
         }
         Ok(())
@@ -221,6 +257,38 @@ mod tests {
             .filter_map(|e| e.ok())
             .collect();
         assert_eq!(leftovers.len(), 1, "no temporary file left behind");
+    }
+
+    #[test]
+    fn flush_waits_for_every_queued_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = FrameWriter::new(2, 4);
+        let rgba = vec![200u8; 64 * 64 * 4];
+        for f in 0..6 {
+            w.submit(frame_path(dir.path(), f), 64, 64, rgba.clone())
+                .unwrap();
+        }
+        w.flush().unwrap();
+        for f in 0..6 {
+            assert!(frame_path(dir.path(), f).exists(), "frame {f} written");
+        }
+        w.submit(frame_path(dir.path(), 6), 64, 64, rgba).unwrap();
+        w.finish().unwrap();
+        assert!(frame_path(dir.path(), 6).exists());
+    }
+
+    #[test]
+    fn flush_reports_a_failed_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("a-file");
+        std::fs::write(&file, b"x").unwrap();
+        let mut w = FrameWriter::new(1, 2);
+        // The parent of the frame is a regular file: the write fails with ENOTDIR.
+        let bad = frame_path(&file, 0);
+        w.submit(bad, 1, 1, vec![0, 0, 0, 255]).unwrap();
+        let err = w.flush().unwrap_err().to_string();
+        assert!(err.contains("a-file/frame_00000.png"), "{err}");
+        assert!(err.to_lowercase().contains("not a directory"), "{err}");
     }
 
     #[test]
