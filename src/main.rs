@@ -406,13 +406,14 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             .with_context(|| format!("cannot create the PLY export directory {}", dir.display()))?;
     }
     eprintln!("adapter: {}", gpu.describe());
+    let manifest_file = manifest_path(&dir, frames.clone(), scene.frame_count());
     let mut needs = limits::render_needs(splats.len(), width, height);
     if let Some(s) = &setup {
         needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
     }
     limits::check_gpu(&gpu, &needs)?;
     if args.resume {
-        check_manifest_for_resume(&dir, hash)?;
+        check_manifest_for_resume(&manifest_file, hash)?;
     }
     let done = |frame: u32| frame_done(&dir, args.export_ply.as_deref(), frame);
     let first_missing = if args.resume {
@@ -528,7 +529,7 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         from_states: None,
         export_ply: args.export_ply.clone(),
     };
-    let mut manifest = new_manifest(&args, &dir, hash, &gpu, settings, started);
+    let mut manifest = new_manifest(&args, manifest_file, hash, &gpu, settings, started);
     manifest.write_now()?;
 
     let rotator = args
@@ -670,9 +671,8 @@ fn frame_done(dir: &Path, export_ply: Option<&Path>, frame: u32) -> bool {
 
 /// `--resume` into a folder whose manifest names another scene is refused (its frames
 /// would be mixed with this scene's).
-fn check_manifest_for_resume(dir: &Path, hash: u64) -> Result<()> {
-    let path = manifest_path(dir);
-    if let Some(m) = Manifest::read(&path) {
+fn check_manifest_for_resume(path: &Path, hash: u64) -> Result<()> {
+    if let Some(m) = Manifest::read(path) {
         let ours = format!("{hash:016x}");
         if m.scene_hash != ours {
             bail!(
@@ -687,7 +687,7 @@ fn check_manifest_for_resume(dir: &Path, hash: u64) -> Result<()> {
 
 fn new_manifest(
     args: &RenderArgs,
-    dir: &Path,
+    path: PathBuf,
     hash: u64,
     gpu: &GpuContext,
     settings: Settings,
@@ -701,13 +701,13 @@ fn new_manifest(
     let mut m = Manifest::new(scene_name, hash, gpu.describe(), settings);
     if args.resume {
         // Keep the timings of the frames an earlier run of the same scene rendered.
-        if let Some(old) = Manifest::read(&manifest_path(dir)) {
+        if let Some(old) = Manifest::read(&path) {
             if old.scene_hash == m.scene_hash {
                 m.frames = old.frames;
             }
         }
     }
-    ManifestWriter::new(dir, m, started)
+    ManifestWriter::new(path, m, started)
 }
 
 /// `--video`: a plausible name and ffmpeg on the PATH, before any rendering.
@@ -803,10 +803,11 @@ fn render_from_states(backend: Option<BackendChoice>, args: RenderArgs) -> Resul
         .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     let gpu = GpuContext::new(backend)?;
     eprintln!("adapter: {}", gpu.describe());
+    let manifest_file = manifest_path(&dir, frames.clone(), scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
     limits::check_gpu(&gpu, &limits::render_needs(0, width, height))?;
     if args.resume {
-        check_manifest_for_resume(&dir, hash)?;
+        check_manifest_for_resume(&manifest_file, hash)?;
     }
     eprintln!(
         "states: {}, {}×{}, frames {}..{} → {}",
@@ -827,7 +828,7 @@ fn render_from_states(backend: Option<BackendChoice>, args: RenderArgs) -> Resul
         from_states: Some(states.clone()),
         ..Default::default()
     };
-    let mut manifest = new_manifest(&args, &dir, hash, &gpu, settings, started);
+    let mut manifest = new_manifest(&args, manifest_file, hash, &gpu, settings, started);
     manifest.write_now()?;
     let mut renderer = GpuRenderer::new(&gpu);
     let background = Vec3::from(scene.output.background);

@@ -239,14 +239,14 @@ const CAMERAS_JSON: &str = r#"[
 ]
 "#;
 
-/// Files in `dir` (names only), sorted; the run manifest (`manifest.json`, which every
-/// render writes) left out.
+/// Files in `dir` (names only), sorted; the run manifest (`manifest.json`, or
+/// `manifest_A-B.json` for a part of the frames, which every render writes) left out.
 fn list(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
         .map(|rd| {
             rd.filter_map(|e| e.ok())
                 .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n != "manifest.json")
+                .filter(|n| !(n.starts_with("manifest") && n.ends_with(".json")))
                 .collect()
         })
         .unwrap_or_default();

@@ -10,9 +10,18 @@ use serde::{Deserialize, Serialize};
 
 use super::{write_atomically, OutputError};
 
-/// `OUT_DIR/manifest.json`.
-pub fn manifest_path(dir: &Path) -> PathBuf {
-    dir.join("manifest.json")
+/// `OUT_DIR/manifest.json` for a run of all `scene_frames` frames; for a part,
+/// `OUT_DIR/manifest_A-B.json` (frames A..B), so that the jobs of a render farm writing
+/// into one folder each keep their own.
+pub fn manifest_path(dir: &Path, frames: std::ops::Range<u32>, scene_frames: u32) -> PathBuf {
+    if frames.start == 0 && frames.end == scene_frames {
+        dir.join("manifest.json")
+    } else {
+        dir.join(format!(
+            "manifest_{:05}-{:05}.json",
+            frames.start, frames.end
+        ))
+    }
 }
 
 /// Bumped when fields change meaning.
@@ -137,10 +146,10 @@ pub struct ManifestWriter {
 }
 
 impl ManifestWriter {
-    pub fn new(dir: &Path, manifest: Manifest, started: Instant) -> Self {
+    pub fn new(path: PathBuf, manifest: Manifest, started: Instant) -> Self {
         ManifestWriter {
             manifest,
-            path: manifest_path(dir),
+            path,
             started,
             last: None,
             interval: Duration::from_millis(500),
@@ -194,7 +203,10 @@ mod tests {
             ..Default::default()
         };
         let m = Manifest::new("s.json".into(), 0xabc, "llvmpipe".into(), settings);
-        let mut w = ManifestWriter::new(dir.path(), m, Instant::now());
+        let path = manifest_path(dir.path(), 0..3, 3);
+        assert!(path.ends_with("manifest.json"));
+        assert!(manifest_path(dir.path(), 1..3, 3).ends_with("manifest_00001-00003.json"));
+        let mut w = ManifestWriter::new(path, m, Instant::now());
         w.frame_done(
             0,
             FrameTiming {

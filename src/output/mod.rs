@@ -81,14 +81,15 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     })
 }
 
-/// `frame_00001.png` → `.frame_00001.png.tmp` (hidden, so globbing `frame_*.png` never
-/// matches a partial file).
+/// `frame_00001.png` → `.frame_00001.png.<pid>.tmp` (hidden, so globbing `frame_*.png`
+/// never matches a partial file; the process id keeps two processes that write the same
+/// file — two farm jobs saving a checkpoint into one folder — off each other's temporary).
 fn temporary_name(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp"))
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 struct Job {
@@ -105,8 +106,9 @@ struct Job {
 pub struct FrameWriter {
     tx: Option<mpsc::SyncSender<Job>>,
     workers: Vec<JoinHandle<Result<Duration, OutputError>>>,
-    /// Jobs finished (written or failed), for [`flush`](Self::flush).
-    done: Arc<(Mutex<u64>, Condvar)>,
+    /// Jobs finished (written or failed) and whether one failed, for
+    /// [`flush`](Self::flush).
+    done: Arc<(Mutex<(u64, bool)>, Condvar)>,
     submitted: u64,
 }
 
@@ -115,7 +117,7 @@ impl FrameWriter {
     pub fn new(workers: usize, depth: usize) -> FrameWriter {
         let (tx, rx) = mpsc::sync_channel::<Job>(depth);
         let rx = Arc::new(Mutex::new(rx));
-        let done = Arc::new((Mutex::new(0u64), Condvar::new()));
+        let done = Arc::new((Mutex::new((0u64, false)), Condvar::new()));
         let workers = (0..workers.max(1))
             .map(|_| {
                 let rx = Arc::clone(&rx);
@@ -129,8 +131,12 @@ impl FrameWriter {
                         let start = Instant::now();
                         let written = write_png(&job.path, job.width, job.height, &job.rgba);
                         busy += start.elapsed();
-                        let (count, cv) = &*done;
-                        *count.lock().unwrap_or_else(|p| p.into_inner()) += 1;
+                        let (state, cv) = &*done;
+                        {
+                            let mut state = state.lock().unwrap_or_else(|p| p.into_inner());
+                            state.0 += 1;
+                            state.1 |= written.is_err();
+                        }
                         cv.notify_all();
                         written?;
                     }
@@ -184,9 +190,9 @@ impl FrameWriter {
     /// keeping the workers for more frames. A checkpoint is saved only after a flush, so the
     /// frames before it are never lost to a crash.
     pub fn flush(&mut self) -> Result<(), OutputError> {
-        let (count, cv) = &*self.done;
-        let mut done = count.lock().unwrap_or_else(|p| p.into_inner());
-        while *done < self.submitted {
+        let (state, cv) = &*self.done;
+        let mut done = state.lock().unwrap_or_else(|p| p.into_inner());
+        while done.0 < self.submitted && !done.1 {
             if self.workers.iter().any(|w| w.is_finished()) {
                 break;
             }
@@ -195,8 +201,10 @@ impl FrameWriter {
                 .unwrap_or_else(|p| p.into_inner())
                 .0;
         }
+        let failed = done.1 || done.0 < self.submitted;
         drop(done);
-        if self.workers.iter().any(|w| w.is_finished()) {
+        if failed {
+            // A failed worker has returned (or is returning) its error: join to get it.
             return Err(self.join().err().unwrap_or(OutputError::WriterGone));
         }
         Ok(())
