@@ -140,9 +140,91 @@ pub fn render_bench(
                 list.join(", ")
             )?;
         }
+        let lit = lit_frame(gpu, n, &camera, repeat)?;
+        writeln!(
+            out,
+            "{:>22} lit, 2 lights, shadows {}³: render ms {:.2} ({:+.0}%); shadows {:.2}, shade {:.2} (each waited for); normals (CPU PCA, k = 30, once per scene) {:.0} ms",
+            "",
+            LIT_RESOLUTION,
+            lit.render_ms,
+            100.0 * (lit.render_ms / median(&mut render) - 1.0),
+            lit.shadows_ms,
+            lit.shade_ms,
+            lit.normals_ms
+        )?;
         out.flush()?;
     }
     Ok(())
+}
+
+/// Shadow-volume resolution of the lit benchmark.
+const LIT_RESOLUTION: u32 = 64;
+
+struct LitTimes {
+    render_ms: f64,
+    shadows_ms: f64,
+    shade_ms: f64,
+    normals_ms: f64,
+}
+
+/// The same synthetic scene relit (issue 4): PCA normals on the CPU, two point lights and
+/// a shadow volume; median render time over `repeat` frames, then one frame pass by pass
+/// for the cost of the shadow and shade passes.
+fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Result<LitTimes> {
+    use crate::relight::normals::{pca_normals, DEFAULT_K};
+    use crate::relight::shadow::VolumeGrid;
+    use crate::relight::{oct_encode, PointLight, ShadingParams};
+    use crate::render::gpu::lighting::LightingSetup;
+
+    let splats = synthetic_splats(n, 3, 7);
+    let start = Instant::now();
+    let normals = pca_normals(&splats.means, DEFAULT_K);
+    let normals_ms = start.elapsed().as_secs_f64() * 1e3;
+    let mut renderer = GpuRenderer::new(gpu);
+    renderer.upload(gpu, &splats)?;
+    renderer.set_lighting(
+        gpu,
+        &LightingSetup {
+            ambient: Vec3::splat(0.3),
+            materials: vec![ShadingParams::default()],
+            shading: normals.iter().map(|n| [oct_encode(*n), 0]).collect(),
+            shadows: Some(VolumeGrid::covering(
+                Vec3::splat(-1.0),
+                Vec3::splat(1.0),
+                LIT_RESOLUTION,
+            )),
+            max_lights: 2,
+        },
+    )?;
+    renderer.set_lights(&[
+        PointLight {
+            position: Vec3::new(2.0, -1.0, 2.0),
+            radiance: Vec3::new(6.0, 5.0, 4.0),
+        },
+        PointLight {
+            position: Vec3::new(-2.0, 1.0, 1.0),
+            radiance: Vec3::new(2.0, 3.0, 4.0),
+        },
+    ]);
+    renderer.render_timed(gpu, camera, Vec3::ZERO)?;
+    let mut times = Vec::new();
+    for _ in 0..repeat {
+        times.push(renderer.render_timed(gpu, camera, Vec3::ZERO)?.1.render_ms);
+    }
+    renderer.profile_passes(true);
+    let (_, t) = renderer.render_timed(gpu, camera, Vec3::ZERO)?;
+    let pass = |name: &str| {
+        t.passes
+            .iter()
+            .find(|(p, _)| *p == name)
+            .map_or(0.0, |(_, ms)| *ms)
+    };
+    Ok(LitTimes {
+        render_ms: median(&mut times),
+        shadows_ms: pass("shadows"),
+        shade_ms: pass("shade"),
+        normals_ms,
+    })
 }
 
 /// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step with a NACC

@@ -1,7 +1,10 @@
 // Shadows, pass 2 (per voxel and light): the transmittance T = exp(−∫ σ ds) from the voxel's
-// centre to the light through the optical-depth volume, marched in steps of half a voxel
-// with trilinear samples, stopping where the ray leaves the volume (nothing outside casts
-// shadows). Mirrors `relight::shadow::ShadowVolume::transmittance`.
+// centre to the light through the optical-depth volume, marched in steps of one voxel with
+// trilinear samples, stopping where the ray leaves the volume (nothing outside casts
+// shadows) or once the light is blocked (τ > OPAQUE). Mirrors `relight::shadow::transmittance`.
+
+// exp(−12) ≈ 6e-6: no visible light gets through.
+const OPAQUE: f32 = 12.0;
 
 @group(0) @binding(0) var<storage, read> lights: Lights;
 @group(0) @binding(1) var<storage, read> depth: array<u32>;
@@ -52,9 +55,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         let t1 = (vec3<f32>(res) - 0.5 - start) * inv;
         let exit = min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z));
         let end = min(dist, max(exit, 0.0));
-        let steps = u32(ceil(end / 0.5));
+        let steps = u32(ceil(end));
         let ds = end / f32(max(steps, 1u));
-        for (var s = 0u; s < steps; s++) {
+        for (var s = 0u; s < steps && tau < OPAQUE; s++) {
             tau += depth_at(start + dir * ((f32(s) + 0.5) * ds), res) * ds;
         }
     }

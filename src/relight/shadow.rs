@@ -112,7 +112,8 @@ fn depth_at(grid: &VolumeGrid, depth: &[u32], x: Vec3) -> f32 {
 }
 
 /// Transmittance exp(−∫σ ds) from world point `from` to the light at `light`, marched like
-/// `shadow_transmit.wgsl` (half-voxel steps, stopping where the ray leaves the volume).
+/// `shadow_transmit.wgsl` (one-voxel steps, stopping where the ray leaves the volume or the
+/// optical depth passes 12).
 pub fn transmittance(grid: &VolumeGrid, depth: &[u32], from: Vec3, light: Vec3) -> f32 {
     let start = grid.local(from);
     let to = grid.local(light) - start;
@@ -126,11 +127,15 @@ pub fn transmittance(grid: &VolumeGrid, depth: &[u32], from: Vec3, light: Vec3) 
     let t1 = (grid.res.as_vec3() - 0.5 - start) * inv;
     let exit = t0.max(t1).min_element();
     let end = dist.min(exit.max(0.0));
-    let steps = (end / 0.5).ceil() as u32;
+    let steps = end.ceil() as u32;
     let ds = end / steps.max(1) as f32;
-    let tau: f32 = (0..steps)
-        .map(|s| depth_at(grid, depth, start + dir * ((s as f32 + 0.5) * ds)) * ds)
-        .sum();
+    let mut tau = 0.0;
+    for s in 0..steps {
+        if tau >= 12.0 {
+            break;
+        }
+        tau += depth_at(grid, depth, start + dir * ((s as f32 + 0.5) * ds)) * ds;
+    }
     (-tau).exp()
 }
 

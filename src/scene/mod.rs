@@ -8,6 +8,7 @@
 //! Parsing is strict: unknown keys are errors, and every number is checked after parsing
 //! ([`Scene::validate`]). Errors name the file, the field path and the offending value.
 
+pub mod lighting;
 mod path;
 pub mod simulation;
 
@@ -129,6 +130,10 @@ pub struct Scene {
     /// The MPM simulation of the objects that have `physics` (see docs/physics.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub simulation: Option<simulation::SimulationSpec>,
+    /// Relighting: point lights, ambient light, shadows (see docs/relighting.md). Without
+    /// it the Gaussians keep their own colours.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lighting: Option<lighting::LightingSpec>,
     /// Folder that relative paths in the scene (PLY files, cameras.json) resolve against:
     /// the scene file's folder.
     #[serde(skip)]
@@ -299,6 +304,9 @@ pub struct ObjectSpec {
     /// Simulate this object (needs the scene's `simulation` block). Default: static.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub physics: Option<simulation::PhysicsSpec>,
+    /// Blinn-Phong weights under the scene's `lighting`. Default: the paper's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shading: Option<lighting::ShadingSpec>,
 }
 
 /// x_world = R · diag(scale) · x_object + translate, R from `rotate_deg`.
@@ -627,6 +635,12 @@ impl Scene {
 
         for (i, obj) in self.objects.iter().enumerate() {
             self.validate_object(i, obj)?;
+            if let Some(sh) = &obj.shading {
+                lighting::validate_shading(o, i, sh)?;
+            }
+        }
+        if let Some(l) = &self.lighting {
+            l.validate(o)?;
         }
         Ok(())
     }

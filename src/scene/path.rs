@@ -245,6 +245,34 @@ impl Hermite {
     }
 }
 
+/// A point moving through timed keyframes on the same C¹ Hermite spline as camera
+/// positions (lights use it), plus a linearly interpolated value per keyframe.
+#[derive(Clone, Debug)]
+pub(crate) struct KeyedPoint {
+    spline: Hermite,
+    values: Vec<Vec3>,
+}
+
+impl KeyedPoint {
+    /// `times` strictly increasing, one point and one value per time.
+    pub(crate) fn new(times: Vec<f32>, points: Vec<Vec3>, values: Vec<Vec3>) -> KeyedPoint {
+        KeyedPoint {
+            spline: Hermite::new(times, points),
+            values,
+        }
+    }
+
+    /// Position and value at `t` seconds (held before the first and after the last key).
+    pub(crate) fn at(&self, t: f32) -> (Vec3, Vec3) {
+        let seg = locate(&self.spline.times, t);
+        let value = match seg {
+            Segment::At(i) => self.values[i],
+            Segment::Between(i, u) => self.values[i].lerp(self.values[i + 1], u),
+        };
+        (self.spline.eval(seg), value)
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 enum Segment {
     /// Exactly at (or clamped to) knot i.

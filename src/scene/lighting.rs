@@ -1,0 +1,387 @@
+//! The scene file's `lighting` block and per-object `shading` (docs/scene-format.md,
+//! docs/relighting.md): point lights on keyframed paths, ambient light, shadows, and the
+//! per-object Blinn-Phong weights; [`prepare`] turns them into the renderer's
+//! [`LightingSetup`] (normals by PCA per object) and [`SceneLights::at`] gives each frame's
+//! lights.
+
+use glam::Vec3;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::path::KeyedPoint;
+use super::{BuildReport, Scene, SceneError};
+use crate::relight::normals::{pca_normals, DEFAULT_K};
+use crate::relight::shadow::VolumeGrid;
+use crate::relight::{oct_encode, PointLight, ShadingParams, MAX_LIGHTS};
+use crate::render::gpu::lighting::LightingSetup;
+use crate::render::Splats;
+
+fn one3() -> [f32; 3] {
+    [1.0; 3]
+}
+fn one() -> f32 {
+    1.0
+}
+fn default_k() -> usize {
+    DEFAULT_K
+}
+
+/// `lighting`: without it, scenes keep their plain 3DGS colours.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LightingSpec {
+    /// Ambient light I_a (linear RGB). Default [1, 1, 1] (scaled per object by
+    /// `shading.ambient`, default 0.8).
+    #[serde(default = "one3")]
+    pub ambient: [f32; 3],
+    /// Point lights, at most 8.
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    /// Shadows. Default on, 64 voxels along the longest side of the scene.
+    #[serde(default)]
+    pub shadows: ShadowSpec,
+    /// Neighbours per PCA normal. Default 30.
+    #[serde(default = "default_k")]
+    pub normal_neighbours: usize,
+}
+
+/// A point light: fixed (`position`) or moving (`keyframes`).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LightSpec {
+    /// Where the light is, when it does not move.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 3]>,
+    /// A path: positions splined like the camera's, colour and intensity linear.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub keyframes: Vec<LightKey>,
+    /// Colour (linear RGB). Default white.
+    #[serde(default = "one3")]
+    pub color: [f32; 3],
+    /// Intensity: the light delivers colour × intensity / r² at distance r. Default 1.
+    #[serde(default = "one")]
+    pub intensity: f32,
+}
+
+/// One keyframe of a moving light; colour and intensity default to the light's.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LightKey {
+    /// Seconds; strictly increasing.
+    pub time: f32,
+    pub position: [f32; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f32; 3]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub intensity: Option<f32>,
+}
+
+/// `lighting.shadows`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShadowSpec {
+    /// Cast shadows. Default true.
+    #[serde(default = "yes")]
+    pub enabled: bool,
+    /// Voxels of the shadow volume along the scene's longest side, 8..=256. Default 64.
+    #[serde(default = "default_resolution")]
+    pub resolution: u32,
+}
+
+fn yes() -> bool {
+    true
+}
+fn default_resolution() -> u32 {
+    64
+}
+
+impl Default for ShadowSpec {
+    fn default() -> Self {
+        ShadowSpec {
+            enabled: true,
+            resolution: default_resolution(),
+        }
+    }
+}
+
+/// An object's `shading`: Blinn-Phong weights (defaults: the paper's code's).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ShadingSpec {
+    /// Ambient weight. Default 0.8.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ambient: Option<f32>,
+    /// Diffuse weight. Default 0.4.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diffuse: Option<f32>,
+    /// Specular weight. Default 0.1.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub specular: Option<f32>,
+    /// Shininess exponent. Default 32.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shininess: Option<f32>,
+}
+
+impl ShadingSpec {
+    pub fn params(&self) -> ShadingParams {
+        let d = ShadingParams::default();
+        ShadingParams {
+            ambient: self.ambient.unwrap_or(d.ambient),
+            diffuse: self.diffuse.unwrap_or(d.diffuse),
+            specular: self.specular.unwrap_or(d.specular),
+            shininess: self.shininess.unwrap_or(d.shininess),
+        }
+    }
+}
+
+fn check_color(o: &str, field: String, c: [f32; 3]) -> Result<(), SceneError> {
+    if c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            o,
+            field,
+            format!("{c:?}"),
+            "finite values ≥ 0",
+        ))
+    }
+}
+
+fn check_weight(o: &str, field: String, v: f32) -> Result<(), SceneError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(o, field, v, "a finite number ≥ 0"))
+    }
+}
+
+impl LightingSpec {
+    /// Check every value; errors name the field.
+    pub fn validate(&self, o: &str) -> Result<(), SceneError> {
+        check_color(o, "lighting.ambient".into(), self.ambient)?;
+        if self.lights.len() > MAX_LIGHTS {
+            return Err(SceneError::invalid(
+                o,
+                "lighting.lights",
+                format!("{} lights", self.lights.len()),
+                format!("at most {MAX_LIGHTS}"),
+            ));
+        }
+        if !(3..=256).contains(&self.normal_neighbours) {
+            return Err(SceneError::invalid(
+                o,
+                "lighting.normal_neighbours",
+                self.normal_neighbours,
+                "3 to 256",
+            ));
+        }
+        if !(8..=256).contains(&self.shadows.resolution) {
+            return Err(SceneError::invalid(
+                o,
+                "lighting.shadows.resolution",
+                self.shadows.resolution,
+                "8 to 256 voxels",
+            ));
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            let f = |name: &str| format!("lighting.lights[{i}].{name}");
+            check_color(o, f("color"), l.color)?;
+            check_weight(o, f("intensity"), l.intensity)?;
+            match (&l.position, l.keyframes.is_empty()) {
+                (Some(p), true) => {
+                    if !p.iter().all(|v| v.is_finite()) {
+                        return Err(SceneError::invalid(
+                            o,
+                            f("position"),
+                            format!("{p:?}"),
+                            "finite coordinates",
+                        ));
+                    }
+                }
+                (None, false) => {
+                    for (k, key) in l.keyframes.iter().enumerate() {
+                        let g = |name: &str| format!("lighting.lights[{i}].keyframes[{k}].{name}");
+                        if !key.time.is_finite() || (k > 0 && key.time <= l.keyframes[k - 1].time) {
+                            return Err(SceneError::invalid(
+                                o,
+                                g("time"),
+                                key.time,
+                                "finite times that strictly increase",
+                            ));
+                        }
+                        if !key.position.iter().all(|v| v.is_finite()) {
+                            return Err(SceneError::invalid(
+                                o,
+                                g("position"),
+                                format!("{:?}", key.position),
+                                "finite coordinates",
+                            ));
+                        }
+                        if let Some(c) = key.color {
+                            check_color(o, g("color"), c)?;
+                        }
+                        if let Some(v) = key.intensity {
+                            check_weight(o, g("intensity"), v)?;
+                        }
+                    }
+                }
+                _ => {
+                    return Err(SceneError::invalid(
+                        o,
+                        format!("lighting.lights[{i}]"),
+                        "both or neither of position and keyframes",
+                        "exactly one of `position` or `keyframes`",
+                    ))
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Validate an object's `shading` (field path `objects[i].shading`).
+pub fn validate_shading(o: &str, i: usize, s: &ShadingSpec) -> Result<(), SceneError> {
+    let p = s.params();
+    for (name, v) in [
+        ("ambient", p.ambient),
+        ("diffuse", p.diffuse),
+        ("specular", p.specular),
+    ] {
+        check_weight(o, format!("objects[{i}].shading.{name}"), v)?;
+    }
+    if !(p.shininess.is_finite() && p.shininess > 0.0) {
+        return Err(SceneError::invalid(
+            o,
+            format!("objects[{i}].shading.shininess"),
+            p.shininess,
+            "a finite number > 0",
+        ));
+    }
+    Ok(())
+}
+
+/// The lights of a scene over time.
+#[derive(Clone, Debug)]
+pub struct SceneLights {
+    lights: Vec<KeyedPoint>,
+}
+
+impl SceneLights {
+    /// The point lights at `seconds`.
+    pub fn at(&self, seconds: f32) -> Vec<PointLight> {
+        self.lights
+            .iter()
+            .map(|l| {
+                let (position, radiance) = l.at(seconds);
+                PointLight { position, radiance }
+            })
+            .collect()
+    }
+}
+
+/// What a run needs to relight a scene.
+pub struct SceneLighting {
+    pub setup: LightingSetup,
+    pub lights: SceneLights,
+    /// Seconds spent on PCA normals.
+    pub normals_seconds: f64,
+}
+
+/// The relighting of `scene` whose Gaussians `splats` hold the objects in the order the
+/// run uploads them: file order, or — when `simulating` — static objects first, then the
+/// simulated ones (see `simulation::prepare`); `report` gives each object's count. None when
+/// the scene has no `lighting` block. `extra_bounds` (the simulation domain) widens the
+/// shadow volume to cover everything that may move.
+pub fn prepare(
+    scene: &Scene,
+    splats: &Splats,
+    report: &BuildReport,
+    simulating: bool,
+    extra_bounds: Option<(Vec3, Vec3)>,
+) -> Result<Option<SceneLighting>, SceneError> {
+    let Some(spec) = &scene.lighting else {
+        return Ok(None);
+    };
+    let o = scene.origin.as_str();
+    spec.validate(o)?;
+    let order: Vec<usize> = if simulating {
+        (0..scene.objects.len())
+            .filter(|i| scene.objects[*i].physics.is_none())
+            .chain((0..scene.objects.len()).filter(|i| scene.objects[*i].physics.is_some()))
+            .collect()
+    } else {
+        (0..scene.objects.len()).collect()
+    };
+    let start = std::time::Instant::now();
+    let mut shading = Vec::with_capacity(splats.len());
+    let mut materials = Vec::new();
+    let mut at = 0;
+    for &i in &order {
+        let n = report.objects[i].gaussians;
+        let obj = &scene.objects[i];
+        let params = obj.shading.clone().unwrap_or_default();
+        validate_shading(o, i, &params)?;
+        let material = materials.len() as u32;
+        materials.push(params.params());
+        let normals = pca_normals(&splats.means[at..at + n], spec.normal_neighbours);
+        shading.extend(normals.iter().map(|n| [oct_encode(*n), material]));
+        at += n;
+    }
+    if at != splats.len() {
+        return Err(SceneError::invalid(
+            o,
+            "objects",
+            format!("{at} Gaussians in the objects"),
+            format!("{} (internal: object counts do not add up)", splats.len()),
+        ));
+    }
+    let normals_seconds = start.elapsed().as_secs_f64();
+    let shadows = spec.shadows.enabled.then(|| {
+        let (mut lo, mut hi) = splats.means.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        if let Some((a, b)) = extra_bounds {
+            lo = lo.min(a);
+            hi = hi.max(b);
+        }
+        if !lo.is_finite() || !hi.is_finite() {
+            (lo, hi) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        }
+        VolumeGrid::covering(lo, hi, spec.shadows.resolution)
+    });
+    let lights = SceneLights {
+        lights: spec
+            .lights
+            .iter()
+            .map(|l| {
+                let base = Vec3::from(l.color) * l.intensity;
+                match l.position {
+                    Some(p) => KeyedPoint::new(vec![0.0], vec![Vec3::from(p)], vec![base]),
+                    None => KeyedPoint::new(
+                        l.keyframes.iter().map(|k| k.time).collect(),
+                        l.keyframes.iter().map(|k| Vec3::from(k.position)).collect(),
+                        l.keyframes
+                            .iter()
+                            .map(|k| {
+                                Vec3::from(k.color.unwrap_or(l.color))
+                                    * k.intensity.unwrap_or(l.intensity)
+                            })
+                            .collect(),
+                    ),
+                }
+            })
+            .collect(),
+    };
+    Ok(Some(SceneLighting {
+        setup: LightingSetup {
+            ambient: Vec3::from(spec.ambient),
+            materials,
+            shading,
+            shadows,
+            max_lights: spec.lights.len().max(1),
+        },
+        lights,
+        normals_seconds,
+    }))
+}

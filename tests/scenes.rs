@@ -1,0 +1,104 @@
+//! The shipped scenes (`scenes/*.json`): each renders on the test adapter at a tiny size
+//! for its first frames, and the relit scene's lighting reaches the image.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn splatter(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splatter"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run splatter")
+}
+
+fn scenes() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut list: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("scenes/")
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    list.sort();
+    list
+}
+
+fn render(scene: &Path, out: &Path, frames: &str) -> Vec<image::RgbImage> {
+    let o = splatter(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--frames",
+        frames,
+    ]);
+    assert!(
+        o.status.success(),
+        "{}: {}",
+        scene.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let mut names: Vec<PathBuf> = std::fs::read_dir(out)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "png"))
+        .collect();
+    names.sort();
+    names
+        .iter()
+        .map(|p| image::open(p).unwrap().to_rgb8())
+        .collect()
+}
+
+fn mean_abs_diff(a: &image::RgbImage, b: &image::RgbImage) -> f64 {
+    let s: u64 = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| u64::from(x.abs_diff(*y)))
+        .sum();
+    s as f64 / a.as_raw().len() as f64
+}
+
+#[test]
+fn every_shipped_scene_renders_its_first_frames() {
+    let list = scenes();
+    assert!(list.len() >= 5, "scenes/ holds the example scenes");
+    for scene in list {
+        let dir = tempfile::tempdir().unwrap();
+        let images = render(&scene, dir.path(), "0..2");
+        assert_eq!(images.len(), 2, "{}", scene.display());
+        let background = *images[0].get_pixel(0, 0);
+        assert!(
+            images[0].pixels().any(|p| *p != background),
+            "{}: only background",
+            scene.display()
+        );
+    }
+}
+
+/// `scenes/relit.json` (two moving lights around a dropped jelly cube): the lighting
+/// changes the image (against the same scene without its `lighting` block), and the image
+/// changes between frames.
+#[test]
+fn the_relit_scene_is_relit() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/relit.json");
+    let dir = tempfile::tempdir().unwrap();
+    let lit = render(&scene, &dir.path().join("lit"), "0..3");
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&scene).unwrap()).unwrap();
+    assert!(json["lighting"]["lights"].as_array().unwrap().len() == 2);
+    json.as_object_mut().unwrap().remove("lighting");
+    let plain_scene = dir.path().join("plain.json");
+    std::fs::write(&plain_scene, json.to_string()).unwrap();
+    let plain = render(&plain_scene, &dir.path().join("plain"), "0..1");
+    let lighting_effect = mean_abs_diff(&lit[0], &plain[0]);
+    let frame_change = mean_abs_diff(&lit[0], &lit[2]);
+    eprintln!("lit vs unlit: {lighting_effect:.2} levels; frame 0 vs 2: {frame_change:.2} levels");
+    assert!(lighting_effect > 5.0);
+    assert!(frame_change > 0.5);
+}
