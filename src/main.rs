@@ -474,6 +474,29 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     );
     let mut renderer = GpuRenderer::new(&gpu);
     renderer.upload(&gpu, &splats)?;
+    // Relighting before the derive pass is built: derive moves the simulated normals.
+    let lighting = scene::lighting::prepare(
+        &scene,
+        &splats,
+        &report,
+        setup.is_some(),
+        setup
+            .as_ref()
+            .map(|s| (s.grid.lo.as_vec3(), s.grid.hi().as_vec3())),
+    )?;
+    if let Some(l) = &lighting {
+        eprintln!(
+            "lighting: {} lights, shadows {}, normals of {} Gaussians in {:.2} s",
+            l.lights.at(0.0).len(),
+            l.setup.shadows.map_or("off".to_string(), |g| format!(
+                "{}×{}×{} voxels",
+                g.res.x, g.res.y, g.res.z
+            )),
+            splats.len(),
+            l.normals_seconds
+        );
+        renderer.set_lighting(&gpu, &l.setup)?;
+    }
     let sim = match &setup {
         Some(s) => {
             for w in &s.warnings {
@@ -606,6 +629,9 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             if let (Some(dir), Some(rotator)) = (&args.export_ply, &rotator) {
                 let gaussians = renderer.read_gaussians(&gpu)?;
                 splatter::output::export::export_frame(dir, frame, &gaussians, &splats, rotator)?;
+            }
+            if let Some(l) = &lighting {
+                renderer.set_lights(&l.lights.at(frame as f32 / scene.output.fps));
             }
             let camera = path.camera(frame);
             let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;
