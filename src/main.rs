@@ -632,6 +632,17 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             }
             if let Some(l) = &lighting {
                 renderer.set_lights(&l.lights.at(frame as f32 / scene.output.fps));
+                if !l.recompute.is_empty() {
+                    // Normals in the deformed configuration (new fracture faces included).
+                    let means: Vec<Vec3> = renderer
+                        .read_gaussians(&gpu)?
+                        .iter()
+                        .map(|g| Vec3::new(g.mean_opacity[0], g.mean_opacity[1], g.mean_opacity[2]))
+                        .collect();
+                    for (start, normals) in l.recompute_normals(&means) {
+                        renderer.update_normals(&gpu, start, &normals)?;
+                    }
+                }
             }
             let camera = path.camera(frame);
             let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;

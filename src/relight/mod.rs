@@ -50,6 +50,7 @@ pub const MAX_LIGHTS: usize = 8;
 /// with c0 the Gaussian's own colour, p its centre, n its unit normal, v the unit direction
 /// from p to the eye, l_m the unit direction from p to light m at distance r_m, T_m ∈ [0, 1]
 /// the light's visibility from p (`visibility[m]`, 1 when shorter than `lights`).
+#[allow(clippy::too_many_arguments)] // the formula's own inputs, named as in SPEC §8
 pub fn blinn_phong(
     c0: Vec3,
     p: Vec3,
@@ -83,7 +84,7 @@ pub const NO_NORMAL: u32 = 0x8000_8000;
 /// [`NO_NORMAL`].
 pub fn oct_encode(n: Vec3) -> u32 {
     let l1 = n.x.abs() + n.y.abs() + n.z.abs();
-    if !(l1 > 0.0) || !l1.is_finite() {
+    if !l1.is_finite() || l1 <= 0.0 {
         return NO_NORMAL;
     }
     let p = Vec2::new(n.x, n.y) / l1;

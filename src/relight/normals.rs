@@ -107,7 +107,7 @@ fn normal_of(p: DVec3, neighbours: &[DVec3], radius: f64) -> Option<(DVec3, DVec
     cov *= 1.0 / n;
     let (lambda, v) = symmetric_eigen(cov);
     // λ sorted descending: a line has λ₁ ≫ λ₂ ≈ λ₃ ≈ 0 and no defined normal.
-    if !(lambda.y > 1e-6 * radius * radius) {
+    if lambda.y.is_nan() || lambda.y <= 1e-6 * radius * radius {
         return None;
     }
     Some((v.z_axis.normalize(), p - c))

@@ -58,7 +58,7 @@ fn optical_mass(opacity: f32, cov: &Sym3, h: f32) -> f32 {
     let tr = xx + yy + zz;
     let c2 = xx * yy - xy * xy + xx * zz - xz * xz + yy * zz - yz * yz;
     let det = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
-    if !(c2 > 0.0) {
+    if c2.is_nan() || c2 <= 0.0 {
         return 0.0;
     }
     let l3 = (det / c2).max(0.0);
@@ -73,11 +73,12 @@ pub fn splat(grid: &VolumeGrid, means: &[Vec3], covs: &[Sym3], opacities: &[f32]
     let top = (grid.res - 1).as_vec3();
     for ((m, c), o) in means.iter().zip(covs).zip(opacities) {
         let rel = grid.local(*m);
-        if !(o.min(0.99) > 0.0) || !rel.cmpge(Vec3::ZERO).all() || !rel.cmplt(top).all() {
+        let transparent = o.is_nan() || *o <= 0.0;
+        if transparent || !rel.cmpge(Vec3::ZERO).all() || !rel.cmplt(top).all() {
             continue;
         }
         let per_length = optical_mass(*o, c, grid.h);
-        if !(per_length > 0.0) || per_length > 1e9 {
+        if per_length.is_nan() || per_length <= 0.0 || per_length > 1e9 {
             continue;
         }
         let base = rel.floor();
@@ -118,7 +119,7 @@ pub fn transmittance(grid: &VolumeGrid, depth: &[u32], from: Vec3, light: Vec3) 
     let start = grid.local(from);
     let to = grid.local(light) - start;
     let dist = to.length();
-    if !(dist > 0.0) {
+    if dist.is_nan() || dist <= 0.0 {
         return 1.0;
     }
     let dir = to / dist;

@@ -43,6 +43,22 @@ pub struct LightingSpec {
     /// Neighbours per PCA normal. Default 30.
     #[serde(default = "default_k")]
     pub normal_neighbours: usize,
+    /// How simulated objects keep their normals: `transport` (n = F⁻ᵀ n₀ on the GPU, in
+    /// the derive pass: free, and exact while the material deforms smoothly) or
+    /// `recompute` (PCA in the deformed configuration every frame: follows topology
+    /// changes such as fracture faces, at the cost of a readback and a k-NN search per
+    /// frame on the CPU). Default `transport`.
+    #[serde(default)]
+    pub simulated_normals: NormalMode,
+}
+
+/// `lighting.simulated_normals`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum NormalMode {
+    #[default]
+    Transport,
+    Recompute,
 }
 
 /// A point light: fixed (`position`) or moving (`keyframes`).
@@ -285,6 +301,22 @@ pub struct SceneLighting {
     pub lights: SceneLights,
     /// Seconds spent on PCA normals.
     pub normals_seconds: f64,
+    /// The simulated objects' Gaussian ranges whose normals are recomputed every frame
+    /// (empty in `transport` mode).
+    pub recompute: Vec<std::ops::Range<usize>>,
+    /// Neighbours per PCA normal.
+    pub k: usize,
+}
+
+impl SceneLighting {
+    /// PCA normals of each recomputed object from the Gaussians' current `means` (all of
+    /// the run's Gaussians): (first Gaussian, normals) per object.
+    pub fn recompute_normals(&self, means: &[Vec3]) -> Vec<(usize, Vec<Vec3>)> {
+        self.recompute
+            .iter()
+            .map(|r| (r.start, pca_normals(&means[r.clone()], self.k)))
+            .collect()
+    }
 }
 
 /// The relighting of `scene` whose Gaussians `splats` hold the objects in the order the
@@ -316,8 +348,15 @@ pub fn prepare(
     let mut shading = Vec::with_capacity(splats.len());
     let mut materials = Vec::new();
     let mut at = 0;
+    let mut recompute = Vec::new();
     for &i in &order {
         let n = report.objects[i].gaussians;
+        if simulating
+            && scene.objects[i].physics.is_some()
+            && spec.simulated_normals == NormalMode::Recompute
+        {
+            recompute.push(at..at + n);
+        }
         let obj = &scene.objects[i];
         let params = obj.shading.clone().unwrap_or_default();
         validate_shading(o, i, &params)?;
@@ -383,5 +422,7 @@ pub fn prepare(
         },
         lights,
         normals_seconds,
+        recompute,
+        k: spec.normal_neighbours,
     }))
 }
