@@ -892,6 +892,10 @@ fn render_from_states(backend: Option<BackendChoice>, args: RenderArgs) -> Resul
             }
             limits::check_gpu(&gpu, &limits::render_needs(splats.len(), width, height))?;
             renderer.upload(&gpu, &splats)?;
+            if let Some(l) = scene::lighting::prepare_state(&scene, &splats)? {
+                renderer.set_lighting(&gpu, &l.setup)?;
+                renderer.set_lights(&l.lights.at(frame as f32 / scene.output.fps));
+            }
             let load_ms = t0.elapsed().as_secs_f64() * 1e3;
             let t1 = Instant::now();
             let (image, timings) = renderer.render_timed(&gpu, &path.camera(frame), background)?;

@@ -389,7 +389,25 @@ pub fn prepare(
         }
         VolumeGrid::covering(lo, hi, spec.shadows.resolution)
     });
-    let lights = SceneLights {
+    let lights = scene_lights(spec);
+    Ok(Some(SceneLighting {
+        setup: LightingSetup {
+            ambient: Vec3::from(spec.ambient),
+            materials,
+            shading,
+            shadows,
+            max_lights: spec.lights.len().max(1),
+        },
+        lights,
+        normals_seconds,
+        recompute,
+        k: spec.normal_neighbours,
+    }))
+}
+
+/// The lights of `spec` over time.
+fn scene_lights(spec: &LightingSpec) -> SceneLights {
+    SceneLights {
         lights: spec
             .lights
             .iter()
@@ -411,18 +429,43 @@ pub fn prepare(
                 }
             })
             .collect(),
+    }
+}
+
+/// Relighting for a render from a saved state (`--from-states`): the state's Gaussians
+/// are one cloud with no object boundaries, so they get PCA normals in the state's own
+/// (deformed) configuration, the default shading weights, and a shadow volume over the
+/// state's bounds. None when the scene has no `lighting` block.
+pub fn prepare_state(scene: &Scene, splats: &Splats) -> Result<Option<SceneLighting>, SceneError> {
+    let Some(spec) = &scene.lighting else {
+        return Ok(None);
     };
+    spec.validate(&scene.origin)?;
+    let start = std::time::Instant::now();
+    let normals = pca_normals(&splats.means, spec.normal_neighbours);
+    let normals_seconds = start.elapsed().as_secs_f64();
+    let shadows = spec.shadows.enabled.then(|| {
+        let (lo, hi) = splats.means.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+        );
+        if lo.is_finite() && hi.is_finite() {
+            VolumeGrid::covering(lo, hi, spec.shadows.resolution)
+        } else {
+            VolumeGrid::covering(Vec3::splat(-1.0), Vec3::ONE, spec.shadows.resolution)
+        }
+    });
     Ok(Some(SceneLighting {
         setup: LightingSetup {
             ambient: Vec3::from(spec.ambient),
-            materials,
-            shading,
+            materials: vec![ShadingParams::default()],
+            shading: normals.iter().map(|n| [oct_encode(*n), 0]).collect(),
             shadows,
             max_lights: spec.lights.len().max(1),
         },
-        lights,
+        lights: scene_lights(spec),
         normals_seconds,
-        recompute,
+        recompute: Vec::new(),
         k: spec.normal_neighbours,
     }))
 }
