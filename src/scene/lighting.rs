@@ -44,10 +44,10 @@ pub struct LightingSpec {
     #[serde(default = "default_k")]
     pub normal_neighbours: usize,
     /// How simulated objects keep their normals: `transport` (n = F⁻ᵀ n₀ on the GPU, in
-    /// the derive pass: free, and exact while the material deforms smoothly) or
-    /// `recompute` (PCA in the deformed configuration every frame: follows topology
-    /// changes such as fracture faces, at the cost of a readback and a k-NN search per
-    /// frame on the CPU). Default `transport`.
+    /// the derive pass: free, and exact while the material deforms smoothly), `recompute`
+    /// (PCA in the deformed configuration every frame: follows fracture faces, at the cost
+    /// of a readback and a k-NN search per frame on the CPU), or `auto`: recompute for
+    /// objects that can fracture (NACC), transport for elastic ones. Default `auto`.
     #[serde(default)]
     pub simulated_normals: NormalMode,
 }
@@ -57,6 +57,7 @@ pub struct LightingSpec {
 #[serde(rename_all = "snake_case")]
 pub enum NormalMode {
     #[default]
+    Auto,
     Transport,
     Recompute,
 }
@@ -351,10 +352,16 @@ pub fn prepare(
     let mut recompute = Vec::new();
     for &i in &order {
         let n = report.objects[i].gaussians;
-        if simulating
-            && scene.objects[i].physics.is_some()
-            && spec.simulated_normals == NormalMode::Recompute
-        {
+        let fractures = scene.objects[i]
+            .physics
+            .as_ref()
+            .is_some_and(|p| matches!(p.material, super::simulation::MaterialSpec::Nacc { .. }));
+        let recomputed = match spec.simulated_normals {
+            NormalMode::Recompute => true,
+            NormalMode::Transport => false,
+            NormalMode::Auto => fractures,
+        };
+        if simulating && scene.objects[i].physics.is_some() && recomputed {
             recompute.push(at..at + n);
         }
         let obj = &scene.objects[i];
