@@ -52,11 +52,17 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let p = gaussians[g].mean_opacity.xyz;
     let s = shading[g];
     let m = materials[s.y];
-    let n = oct_decode(s.x);
+    var n = oct_decode(s.x);
     let c0 = projected[g].color.xyz;
     var out = m.ambient * c0 * lights.ambient.xyz;
     if any(n != vec3<f32>(0.0)) {
         let v = normalize(frame.camera_near.xyz - p);
+        // Two-sided: a visible surface faces the camera, so a normal pointing away is a
+        // wrongly oriented one (PCA cannot always tell the sides of a thin sheet or a
+        // concave patch apart) and is flipped. Correct normals are unaffected.
+        if dot(n, v) < 0.0 {
+            n = -n;
+        }
         for (var i = 0u; i < lights.count; i++) {
             out += light_term(c0, p, n, v, m, lights.position[i].xyz, lights.radiance[i].xyz,
                               visibility(i, p, n));

@@ -62,6 +62,8 @@ pub fn blinn_phong(
     w: &ShadingParams,
 ) -> Vec3 {
     let v = (eye - p).normalize_or_zero();
+    // Two-sided, as the shade pass: a normal facing away from the eye is flipped.
+    let n = if n.dot(v) < 0.0 { -n } else { n };
     let mut out = w.ambient * c0 * ambient;
     for (m, light) in lights.iter().enumerate() {
         let to_light = light.position - p;
@@ -166,7 +168,7 @@ mod tests {
         );
         let want = c0 * 0.8 + c0 * 4.0 * (0.4 + 0.1) / 4.0;
         assert!((out - want).abs().max_element() < 1e-6, "{out} vs {want}");
-        // In full shadow only the ambient term is left; facing away, no diffuse/specular.
+        // In full shadow only the ambient term is left.
         let dark = blinn_phong(
             c0,
             Vec3::ZERO,
@@ -178,7 +180,23 @@ mod tests {
             &w,
         );
         assert!((dark - c0 * 0.8).abs().max_element() < 1e-6);
+        // A light behind the surface (as seen from the eye) adds nothing, and a normal
+        // pointing away from the eye is flipped toward it (two-sided).
+        let behind = PointLight {
+            position: Vec3::new(0.0, 0.0, -2.0),
+            ..light
+        };
         let away = blinn_phong(
+            c0,
+            Vec3::ZERO,
+            Vec3::Z,
+            Vec3::new(0.0, 0.0, 5.0),
+            Vec3::ONE,
+            &[behind],
+            &[1.0],
+            &w,
+        );
+        let flipped = blinn_phong(
             c0,
             Vec3::ZERO,
             -Vec3::Z,
@@ -188,6 +206,7 @@ mod tests {
             &[1.0],
             &w,
         );
+        assert!((flipped - out).abs().max_element() < 1e-6);
         assert!((away - c0 * 0.8).abs().max_element() < 1e-6);
     }
 }
