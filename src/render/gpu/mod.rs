@@ -301,9 +301,18 @@ impl GpuRenderer {
         Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
     }
 
-    /// Upload a set of Gaussians (replacing the previous one).
+    /// Upload a set of Gaussians (replacing the previous one). Lighting set for a different
+    /// number of Gaussians is dropped: call [`set_lighting`](Self::set_lighting) again.
     pub fn upload(&mut self, gpu: &GpuContext, splats: &Splats) -> Result<(), GpuError> {
         let n = splats.len() as u64;
+        // Lighting holds one shading record per Gaussian: a different set needs a new one.
+        if self
+            .lighting
+            .as_ref()
+            .is_some_and(|l| l.rest_shading.len() as u64 != n)
+        {
+            self.lighting = None;
+        }
         let limit = gpu.max_binding();
         for (what, bytes) in [
             (
