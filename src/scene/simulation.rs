@@ -1,7 +1,8 @@
 //! The scene file's simulation: the `simulation` block (grid, step, gravity, boundaries) and
 //! each object's `physics` (material, initial velocity), turned into what the MPM step
-//! needs (SPEC §1–§4). Every Gaussian of a simulated object is a particle; interior filling
-//! is issue 5.
+//! needs (SPEC §1–§4). The selected Gaussians of a simulated object (`physics.select`,
+//! `physics.min_opacity`; default all) are particles, the rest of it stays static; with
+//! `physics.fill` its interior gets particles too (`scene::fill`).
 
 use glam::DVec3;
 use schemars::JsonSchema;
@@ -107,6 +108,121 @@ pub struct PhysicsSpec {
     /// Initial angular velocity (rad/s) about the object's centre of mass. Default 0.
     #[serde(default)]
     pub angular_velocity: [f64; 3],
+    /// Which Gaussians move: those whose mean lies in this region (world coordinates, after
+    /// the object's transform). Default: the whole object. The rest stays static.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub select: Option<SelectSpec>,
+    /// Gaussians with a lower opacity stay static (rendered, not simulated). Default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_opacity: f64,
+    /// Interior filling (`scene::fill`): `true` (spacing Δx/2), `false`, or
+    /// `{"spacing": h}`. Default off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill: Option<FillSpec>,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// A region of the world selecting what moves.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum SelectSpec {
+    /// The axis-aligned box lo ≤ x ≤ hi.
+    Box { lo: [f64; 3], hi: [f64; 3] },
+    /// The ball |x − center| ≤ radius.
+    Sphere { center: [f64; 3], radius: f64 },
+}
+
+impl SelectSpec {
+    fn validate(&self, origin: &str, field: &str) -> Result<(), SceneError> {
+        match self {
+            SelectSpec::Box { lo, hi } => {
+                let (lo, hi) = (vec3(*lo), vec3(*hi));
+                if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.box"),
+                        format!("{lo} .. {hi}"),
+                        "finite lo < hi on every axis",
+                    ));
+                }
+            }
+            SelectSpec::Sphere { center, radius } => {
+                if !vec3(*center).is_finite() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.sphere.center"),
+                        vec3(*center),
+                        "a finite point",
+                    ));
+                }
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.sphere.radius"),
+                        radius,
+                        "a radius > 0",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the point lies in the region (boundary included).
+    pub fn contains(&self, p: DVec3) -> bool {
+        match self {
+            SelectSpec::Box { lo, hi } => p.cmpge(vec3(*lo)).all() && p.cmple(vec3(*hi)).all(),
+            SelectSpec::Sphere { center, radius } => {
+                p.distance_squared(vec3(*center)) <= radius * radius
+            }
+        }
+    }
+}
+
+/// `physics.fill`: `true` / `false`, or options.
+#[derive(Clone, Debug, Serialize, JsonSchema, PartialEq)]
+#[serde(untagged)]
+pub enum FillSpec {
+    /// `true`: fill at spacing Δx/2 (8 particles per cell); `false`: no filling.
+    Enabled(bool),
+    Options(FillOptions),
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FillOptions {
+    /// Particle spacing h of the fill, in [Δx/16, Δx]. Default Δx/2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing: Option<f64>,
+}
+
+impl<'de> Deserialize<'de> for FillSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::Bool(b) => Ok(FillSpec::Enabled(b)),
+            v @ serde_json::Value::Object(_) => serde_json::from_value::<FillOptions>(v)
+                .map(FillSpec::Options)
+                .map_err(|e| D::Error::custom(format!("physics.fill: {e}"))),
+            other => Err(D::Error::custom(format!(
+                "physics.fill: expected true, false or {{\"spacing\": h}}, got {other}"
+            ))),
+        }
+    }
+}
+
+impl FillSpec {
+    /// The fill spacing for grid spacing `dx`, or None when filling is off.
+    fn spacing(&self, dx: f64) -> Option<f64> {
+        match self {
+            FillSpec::Enabled(false) => None,
+            FillSpec::Enabled(true) => Some(0.5 * dx),
+            FillSpec::Options(o) => Some(o.spacing.unwrap_or(0.5 * dx)),
+        }
+    }
 }
 
 /// A material (SPEC §3–§4, parameters as in the paper's table).
@@ -283,6 +399,10 @@ pub struct SimulationSetup {
     pub splats: Splats,
     /// Index of the first simulated Gaussian.
     pub static_count: usize,
+    /// Where each object's Gaussians are in `splats`: contiguous runs, static ones first
+    /// (file order), then per simulated object its selected Gaussians and its fill. An
+    /// object with a `select` or `min_opacity` has a static and a simulated run.
+    pub parts: Vec<SplatPart>,
     pub particles: Particles,
     pub grid: Grid,
     pub materials: Vec<Material>,
@@ -291,6 +411,26 @@ pub struct SimulationSetup {
     pub steps_per_frame: u32,
     /// Messages for the user (a Δt above the CFL bound, …).
     pub warnings: Vec<String>,
+}
+
+/// A run of one object's Gaussians in [`SimulationSetup::splats`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SplatPart {
+    /// Index in `scene.objects`.
+    pub object: usize,
+    pub start: usize,
+    pub len: usize,
+    pub kind: PartKind,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PartKind {
+    /// Rendered as loaded (static objects, unselected Gaussians of simulated ones).
+    Static,
+    /// Selected Gaussians of a simulated object, one particle each.
+    Simulated,
+    /// Interior fill particles of a simulated object (isotropic Gaussians).
+    Fill,
 }
 
 fn vec3(v: [f64; 3]) -> DVec3 {
@@ -383,69 +523,175 @@ pub fn prepare(
         acc += r.gaussians;
     }
     let range = |i: usize| starts[i]..starts[i] + report.objects[i].gaussians;
-    let order: Vec<usize> = (0..scene.objects.len())
-        .filter(|i| scene.objects[*i].physics.is_none())
-        .chain(simulated.iter().copied())
-        .collect();
+    // Which Gaussians of each simulated object move (indices into `splats`).
+    let mut moving: Vec<Option<Vec<usize>>> = vec![None; scene.objects.len()];
+    for &i in &simulated {
+        let physics = scene.objects[i].physics.as_ref().expect("simulated");
+        if let Some(sel) = &physics.select {
+            sel.validate(o, &format!("objects[{i}].physics.select"))?;
+        }
+        let min_opacity = physics.min_opacity;
+        if !(min_opacity.is_finite() && (0.0..=1.0).contains(&min_opacity)) {
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics.min_opacity"),
+                min_opacity,
+                "an opacity in [0, 1]",
+            ));
+        }
+        let picked: Vec<usize> = range(i)
+            .filter(|&g| {
+                f64::from(splats.opacities[g]) >= min_opacity
+                    && physics
+                        .select
+                        .as_ref()
+                        .is_none_or(|s| s.contains(splats.means[g].as_dvec3()))
+            })
+            .collect();
+        if picked.is_empty() && report.objects[i].gaussians > 0 {
+            let field = if physics.select.is_some() {
+                "select"
+            } else {
+                "min_opacity"
+            };
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics.{field}"),
+                format!("a selection of none of the object's {} Gaussians", report.objects[i].gaussians),
+                "at least one Gaussian to simulate (check the region against the object's transform)",
+            ));
+        }
+        moving[i] = Some(picked);
+    }
+
     let mut out = Splats {
         sh_degree: splats.sh_degree,
         ..Default::default()
     };
+    let mut parts = Vec::new();
+    let mut push_part = |out: &mut Splats, part: Splats, object: usize, kind: PartKind| {
+        if !part.is_empty() {
+            parts.push(SplatPart {
+                object,
+                start: out.len(),
+                len: part.len(),
+                kind,
+            });
+            out.append(part);
+        }
+    };
+    // Static first: whole static objects and what simulated objects leave static, in file
+    // order.
+    for i in 0..scene.objects.len() {
+        let part = match &moving[i] {
+            None => subset(&splats, range(i)),
+            Some(picked) => {
+                let mut keep = vec![true; report.objects[i].gaussians];
+                let s = starts[i];
+                for &g in picked {
+                    keep[g - s] = false;
+                }
+                let rest: Vec<usize> = range(i).filter(|g| keep[g - s]).collect();
+                gather(&splats, &rest)
+            }
+        };
+        push_part(&mut out, part, i, PartKind::Static);
+    }
+    let static_count = out.len();
+
     let mut materials = Vec::new();
     let mut particles = Particles::new();
-    let mut static_count = 0;
     let mut warnings = Vec::new();
     let mut dt_cfl = f64::INFINITY;
-    for &i in &order {
-        let r = range(i);
-        let part = subset(&splats, r.clone());
+    for &i in &simulated {
+        let picked = moving[i].as_deref().expect("simulated");
+        let part = gather(&splats, picked);
         let obj = &scene.objects[i];
-        match &obj.physics {
-            None => static_count += part.len(),
-            Some(physics) => {
-                let field = format!("objects[{i}].physics.material");
-                let material = physics.material.build(o, &field)?;
-                let density = physics.material.density();
-                dt_cfl = dt_cfl.min(cfl_dt(&material, density, dx, spec.cfl));
-                let volume = particle_volume(obj, &part);
-                let m_index = materials.len() as u32;
-                materials.push(material);
-                let centre = part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>()
-                    / part.len().max(1) as f64;
-                let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
-                for m in &part.means {
-                    let x = m.as_dvec3();
-                    if grid.stencil(x).is_none() {
-                        return Err(SceneError::invalid(
-                            o,
-                            format!("objects[{i}]"),
-                            format!("a Gaussian at {x}"),
-                            format!("every simulated Gaussian inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
-                        ));
-                    }
-                    particles.push(
-                        x,
-                        v0 + w0.cross(x - centre),
-                        density * volume,
-                        volume,
-                        m_index,
-                        0.0,
-                    );
-                }
-                let start = particles.len() - part.len();
-                // APIC: a rigid spin has velocity gradient C = [ω]×.
-                let skew = glam::DMat3::from_cols(
-                    DVec3::new(0.0, w0.z, -w0.y),
-                    DVec3::new(-w0.z, 0.0, w0.x),
-                    DVec3::new(w0.y, -w0.x, 0.0),
-                );
-                for p in start..particles.len() {
-                    particles.c[p] = skew;
-                    particles.alpha[p] = material.initial_alpha();
-                }
-            }
+        let physics = obj.physics.as_ref().expect("simulated");
+        let field = format!("objects[{i}].physics.material");
+        let material = physics.material.build(o, &field)?;
+        let density = physics.material.density();
+        dt_cfl = dt_cfl.min(cfl_dt(&material, density, dx, spec.cfl));
+        let m_index = materials.len() as u32;
+        materials.push(material);
+
+        let filled = match physics.fill.as_ref().and_then(|f| f.spacing(dx)) {
+            None => None,
+            Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
+        };
+        let fill_splats = filled
+            .as_ref()
+            .map(|f| fill_gaussians(&part, f))
+            .unwrap_or_default();
+        if let Some(f) = &filled {
+            let name = obj.display_name(i);
+            warnings.extend(
+                f.warnings
+                    .iter()
+                    .map(|w| format!("objects[{i}] ({name}): {w}")),
+            );
         }
-        out.append(part);
+        // Positions and rest volumes: the selected Gaussians, then the fill particles.
+        let (xs, volumes): (Vec<DVec3>, Vec<f64>) = match &filled {
+            None => {
+                let v = particle_volume(obj, &part);
+                (
+                    part.means.iter().map(|m| m.as_dvec3()).collect(),
+                    vec![v; part.len()],
+                )
+            }
+            Some(f) => (
+                part.means
+                    .iter()
+                    .map(|m| m.as_dvec3())
+                    .chain(f.points.iter().copied())
+                    .collect(),
+                f.volumes
+                    .iter()
+                    .copied()
+                    .chain(std::iter::repeat_n(f.point_volume, f.points.len()))
+                    .collect(),
+            ),
+        };
+        let centre = if filled.is_some() {
+            let total: f64 = volumes.iter().sum();
+            xs.iter().zip(&volumes).map(|(x, v)| *x * *v).sum::<DVec3>() / total.max(1e-300)
+        } else {
+            part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>() / part.len().max(1) as f64
+        };
+        let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
+        let start = particles.len();
+        for (x, volume) in xs.iter().zip(&volumes) {
+            let x = *x;
+            if grid.stencil(x).is_none() {
+                return Err(SceneError::invalid(
+                    o,
+                    format!("objects[{i}]"),
+                    format!("a Gaussian at {x}"),
+                    format!("every simulated Gaussian inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
+                ));
+            }
+            particles.push(
+                x,
+                v0 + w0.cross(x - centre),
+                density * volume,
+                *volume,
+                m_index,
+                0.0,
+            );
+        }
+        // APIC: a rigid spin has velocity gradient C = [ω]×.
+        let skew = glam::DMat3::from_cols(
+            DVec3::new(0.0, w0.z, -w0.y),
+            DVec3::new(-w0.z, 0.0, w0.x),
+            DVec3::new(w0.y, -w0.x, 0.0),
+        );
+        for p in start..particles.len() {
+            particles.c[p] = skew;
+            particles.alpha[p] = material.initial_alpha();
+        }
+        push_part(&mut out, part, i, PartKind::Simulated);
+        push_part(&mut out, fill_splats, i, PartKind::Fill);
     }
     let frame = 1.0 / f64::from(scene.output.fps);
     let dt = match spec.dt {
@@ -486,6 +732,7 @@ pub fn prepare(
     Ok(Some(SimulationSetup {
         splats: out,
         static_count,
+        parts,
         particles,
         grid,
         materials,
@@ -495,9 +742,9 @@ pub fn prepare(
     }))
 }
 
-/// Rest volume per particle: a procedural object's lattice cell (spacing³); for a PLY, the
-/// object's bounding-box volume shared equally (a stand-in until interior filling, issue 5,
-/// gives real volumes).
+/// Rest volume per particle without `fill`: a procedural object's lattice cell (spacing³);
+/// for a PLY, the selection's bounding-box volume shared equally (a stand-in: with `fill`
+/// the volumes come from the voxelisation instead, `scene::fill`).
 fn particle_volume(obj: &super::ObjectSpec, part: &Splats) -> f64 {
     let (m, _) = obj.transform.affine();
     let scale = f64::from(m.determinant().abs());
@@ -524,5 +771,132 @@ fn subset(s: &Splats, r: std::ops::Range<usize>) -> Splats {
         opacities: s.opacities[r.clone()].to_vec(),
         sh_degree: s.sh_degree,
         sh: s.sh[r.start * k..r.end * k].to_vec(),
+    }
+}
+
+/// The Gaussians at `idx`, in that order.
+fn gather(s: &Splats, idx: &[usize]) -> Splats {
+    let k = s.sh_stride();
+    let mut sh = Vec::with_capacity(idx.len() * k);
+    for &i in idx {
+        sh.extend_from_slice(&s.sh[i * k..(i + 1) * k]);
+    }
+    Splats {
+        means: idx.iter().map(|&i| s.means[i]).collect(),
+        covariances: idx.iter().map(|&i| s.covariances[i]).collect(),
+        rotations: idx.iter().map(|&i| s.rotations[i]).collect(),
+        opacities: idx.iter().map(|&i| s.opacities[i]).collect(),
+        sh_degree: s.sh_degree,
+        sh,
+    }
+}
+
+/// Fill object `i`'s interior (its selected Gaussians `part`) at spacing `h`.
+fn fill_object(
+    scene: &Scene,
+    i: usize,
+    part: &Splats,
+    h: f64,
+    dx: f64,
+) -> Result<super::fill::Fill, SceneError> {
+    use super::fill::{fill, FillInput, InsideTest};
+    let o = scene.origin.as_str();
+    let field = format!("objects[{i}].physics.fill.spacing");
+    if !(h.is_finite() && h >= dx / 16.0 && h <= dx) {
+        return Err(SceneError::invalid(
+            o,
+            field,
+            h,
+            format!("a spacing in [Δx/16, Δx] = [{}, {dx}]", dx / 16.0),
+        ));
+    }
+    let obj = &scene.objects[i];
+    let physics = obj.physics.as_ref().expect("simulated");
+    let region = |p: DVec3| physics.select.as_ref().is_none_or(|s| s.contains(p));
+    let (m, t) = obj.transform.affine();
+    let (m, t) = (m.as_dmat3(), t.as_dvec3());
+    let m_inv = m.inverse();
+    let contains = |p: DVec3| {
+        obj.procedural
+            .as_ref()
+            .is_some_and(|s| s.contains((m_inv * (p - t)).to_array()))
+    };
+    let inside = match &obj.procedural {
+        None => InsideTest::Parity,
+        Some(spec) => {
+            let (blo, bhi) = spec.bounds();
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            for c in 0..8 {
+                let corner = DVec3::new(
+                    if c & 1 == 0 { blo[0] } else { bhi[0] },
+                    if c & 2 == 0 { blo[1] } else { bhi[1] },
+                    if c & 4 == 0 { blo[2] } else { bhi[2] },
+                );
+                let w = m * corner + t;
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+            // Only the selection needs voxels.
+            if let Some(SelectSpec::Box { lo: sl, hi: sh }) = &physics.select {
+                lo = lo.max(vec3(*sl));
+                hi = hi.min(vec3(*sh)).max(lo);
+            }
+            if let Some(SelectSpec::Sphere { center, radius }) = &physics.select {
+                lo = lo.max(vec3(*center) - *radius);
+                hi = hi.min(vec3(*center) + *radius).max(lo);
+            }
+            InsideTest::Exact {
+                contains: &contains,
+                lo,
+                hi,
+            }
+        }
+    };
+    fill(&FillInput {
+        means: &part.means,
+        covariances: &part.covariances,
+        opacities: &part.opacities,
+        spacing: h,
+        inside,
+        region: &region,
+    })
+    .map_err(|e| {
+        SceneError::invalid(
+            o,
+            format!("objects[{i}].physics.fill.spacing"),
+            h,
+            format!("a coarser spacing or a smaller selection: {e}"),
+        )
+    })
+}
+
+/// Opacity of fill Gaussians (the procedural default: opaque when exposed).
+pub const FILL_OPACITY: f32 = 0.95;
+
+/// The fill particles as Gaussians: isotropic with σ = `SCALE_PER_SPACING` · h (as the
+/// procedural lattices, so that an exposed interior has no holes), the DC colour and rest
+/// frame of the nearest selected Gaussian (higher SH bands zero: no view-dependent
+/// highlights inside), opacity [`FILL_OPACITY`].
+fn fill_gaussians(part: &Splats, f: &super::fill::Fill) -> Splats {
+    let h = f.point_volume.cbrt();
+    let sigma = crate::splat::procedural::SCALE_PER_SPACING * h as f32;
+    let var = sigma * sigma;
+    let k = part.sh_stride();
+    let mut sh = vec![0.0; f.points.len() * k];
+    for (j, &d) in f.nearest.iter().enumerate() {
+        let d = d as usize;
+        sh[j * k..j * k + 3].copy_from_slice(&part.sh[d * k..d * k + 3]);
+    }
+    Splats {
+        means: f.points.iter().map(|p| p.as_vec3()).collect(),
+        covariances: vec![[var, 0.0, 0.0, var, 0.0, var]; f.points.len()],
+        rotations: f
+            .nearest
+            .iter()
+            .map(|&d| part.rotations[d as usize])
+            .collect(),
+        opacities: vec![FILL_OPACITY; f.points.len()],
+        sh_degree: part.sh_degree,
+        sh,
     }
 }

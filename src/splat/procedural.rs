@@ -251,6 +251,22 @@ impl ProceduralSpec {
         Ok(cloud)
     }
 
+    /// Whether the point `p` (object coordinates) lies in the solid: the exact inside test
+    /// that interior filling uses for procedural objects (`scene::fill`).
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        Solid::new(&self.shape).contains(p)
+    }
+
+    /// The solid's bounding box (object coordinates), as (lo, hi).
+    pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
+        match Solid::new(&self.shape) {
+            Solid::Sphere { r } => ([-r; 3], [r; 3]),
+            Solid::Box { half } => (half.map(|h| -h), half),
+            Solid::Cylinder { r, half_h } => ([-r, -r, -half_h], [r, r, half_h]),
+            Solid::Slab { half, t } => ([-half[0], -half[1], -t], [half[0], half[1], 0.0]),
+        }
+    }
+
     /// An upper estimate of the number of Gaussians `generate` makes (no allocation).
     pub fn estimated_count(&self) -> f64 {
         let s = f64::from(self.spacing);
@@ -392,6 +408,20 @@ impl Solid {
                 Axis::fitted(-half[1], half[1], s),
                 Axis::fitted(-t, 0.0, s),
             ],
+        }
+    }
+
+    /// Whether a point lies in the solid (boundary included).
+    fn contains(&self, p: [f64; 3]) -> bool {
+        match *self {
+            Solid::Sphere { r } => p[0] * p[0] + p[1] * p[1] + p[2] * p[2] <= r * r,
+            Solid::Box { half } => (0..3).all(|i| p[i].abs() <= half[i]),
+            Solid::Cylinder { r, half_h } => {
+                p[0] * p[0] + p[1] * p[1] <= r * r && p[2].abs() <= half_h
+            }
+            Solid::Slab { half, t } => {
+                p[0].abs() <= half[0] && p[1].abs() <= half[1] && (-t..=0.0).contains(&p[2])
+            }
         }
     }
 

@@ -1,0 +1,519 @@
+//! Interior filling (SPEC §5): particles inside a simulated object, so that a surface-only
+//! capture breaks like a solid and a coarse procedural lattice gets the simulation's
+//! resolution.
+//!
+//! The object is voxelised at the fill spacing h (default Δx/2: 8 particles per grid
+//! cell). A voxel is *solid* when
+//! - procedural objects: its centre passes the shape's exact inside test;
+//! - PLY objects: ray-crossing parity of the Gaussians' density, voted over the x, y and z
+//!   axes. Each Gaussian marks the voxels where ω·exp(−½ dᵀΣ'⁻¹d) ≥ [`BAND_ALPHA`] with
+//!   Σ' = Σ + (h/2)² I (so that flat disks still mark a band one voxel thick); along each
+//!   axis-aligned ray of voxels every run of marked voxels is one crossing, and the voxels
+//!   between the 1st and 2nd, 3rd and 4th, … crossings are inside. A ray crossing an odd
+//!   number of times (an open surface, a ray grazing the surface) votes for nothing. A voxel
+//!   is solid when more rays through it say inside than outside.
+//!
+//! Every solid voxel that holds no Gaussian's mean gets one fill particle at its centre
+//! (volume h³); the Gaussians share the volume h³ of the voxel that holds their mean
+//! equally. The total rest volume is therefore the voxelised volume of the object.
+//!
+//! Guards (bounded time and memory whatever the input): at most [`MAX_FILL_VOXELS`] voxels
+//! and [`MAX_FILL_PARTICLES`] fill particles (errors, with the counts); a Gaussian marks at
+//! most [`MAX_REACH_VOXELS`] voxels either side of its mean per axis (wider ones are
+//! clipped and counted); covariances that are non-finite or not positive semi-definite
+//! mark only the voxel of their mean (counted); non-finite means are ignored (counted).
+//! So the work is O(voxels + Gaussians · (2·4+1)³) and the memory two bytes per voxel.
+
+use std::num::NonZero;
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering::Relaxed};
+
+use glam::{DMat3, DVec3, Vec3};
+use kiddo::immutable::float::kdtree::ImmutableKdTree;
+use kiddo::SquaredEuclidean;
+use rayon::prelude::*;
+
+use crate::render::splats::{mat3_from_sym3, Sym3};
+
+/// Most voxels one fill may use (two bytes each: 64 MiB).
+pub const MAX_FILL_VOXELS: usize = 1 << 25;
+/// Most fill particles one object may get.
+pub const MAX_FILL_PARTICLES: usize = 8 << 20;
+/// A Gaussian marks voxels at most this many voxels away from its mean's, per axis.
+pub const MAX_REACH_VOXELS: i64 = 4;
+/// The density a voxel centre needs from one Gaussian to be on the surface.
+pub const BAND_ALPHA: f64 = 0.1;
+/// Above this share of odd rays (among the rays that meet the surface) a warning says the
+/// surface looks open.
+pub const OPEN_RAY_SHARE: f64 = 0.3;
+
+const MEAN: u8 = 1;
+const BAND: u8 = 2;
+
+/// How solid voxels are found.
+pub enum InsideTest<'a> {
+    /// Ray-crossing parity of the Gaussians' density along x, y and z (PLY objects).
+    Parity,
+    /// An exact inside test in world coordinates and the solid's world bounding box
+    /// (procedural objects).
+    Exact {
+        contains: &'a (dyn Fn(DVec3) -> bool + Sync),
+        lo: DVec3,
+        hi: DVec3,
+    },
+}
+
+/// What to fill: one object's Gaussians (world space) and the fill settings.
+pub struct FillInput<'a> {
+    pub means: &'a [Vec3],
+    pub covariances: &'a [Sym3],
+    pub opacities: &'a [f32],
+    /// Particle spacing h: one particle per h³ voxel.
+    pub spacing: f64,
+    pub inside: InsideTest<'a>,
+    /// Only voxels whose centre passes this test are filled (the object's selection).
+    pub region: &'a (dyn Fn(DVec3) -> bool + Sync),
+}
+
+/// Counts of what the fill saw, for reports and tests.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct FillStats {
+    /// Voxels of the grid [nx, ny, nz].
+    pub dims: [usize; 3],
+    /// Voxels marked as surface by the density (parity only).
+    pub band_voxels: usize,
+    /// Solid voxels (inside), with or without a Gaussian.
+    pub solid_voxels: usize,
+    /// Rays (parity only) that meet the surface, and those among them with an odd count.
+    pub rays_hit: usize,
+    pub odd_rays: usize,
+    /// Gaussians whose covariance was unusable (marked as points), or whose mean was not
+    /// finite (ignored).
+    pub degenerate: usize,
+    pub nonfinite_means: usize,
+    /// Gaussians wider than [`MAX_REACH_VOXELS`] voxels, clipped.
+    pub clipped: usize,
+}
+
+/// The fill of one object.
+#[derive(Clone, Debug, Default)]
+pub struct Fill {
+    /// Fill particles (voxel centres), in voxel order (x fastest).
+    pub points: Vec<DVec3>,
+    /// For each fill particle, the input Gaussian nearest to it (its appearance donor).
+    pub nearest: Vec<u32>,
+    /// Rest volume of each input Gaussian (its share of its voxel).
+    pub volumes: Vec<f64>,
+    /// Rest volume of each fill particle: h³.
+    pub point_volume: f64,
+    pub stats: FillStats,
+    /// Messages for the user: what was odd in the input.
+    pub warnings: Vec<String>,
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FillError {
+    #[error("{count:.0} voxels ({nx:.0} × {ny:.0} × {nz:.0}) at spacing {spacing}; at most {max} are allowed")]
+    TooManyVoxels {
+        count: f64,
+        nx: f64,
+        ny: f64,
+        nz: f64,
+        spacing: f64,
+        max: usize,
+    },
+    #[error("{count} fill particles at spacing {spacing}; at most {max} are allowed")]
+    TooManyParticles {
+        count: usize,
+        spacing: f64,
+        max: usize,
+    },
+    #[error("spacing {0}: expected a finite spacing > 0")]
+    BadSpacing(f64),
+}
+
+/// The voxel grid: centres lo + (i + ½) h.
+struct Voxels {
+    lo: DVec3,
+    h: f64,
+    n: [usize; 3],
+}
+
+impl Voxels {
+    fn len(&self) -> usize {
+        self.n[0] * self.n[1] * self.n[2]
+    }
+    fn index(&self, i: [usize; 3]) -> usize {
+        i[0] + self.n[0] * (i[1] + self.n[1] * i[2])
+    }
+    fn coords(&self, idx: usize) -> [usize; 3] {
+        let x = idx % self.n[0];
+        let r = idx / self.n[0];
+        [x, r % self.n[1], r / self.n[1]]
+    }
+    fn centre(&self, i: [usize; 3]) -> DVec3 {
+        self.lo + (DVec3::new(i[0] as f64, i[1] as f64, i[2] as f64) + 0.5) * self.h
+    }
+    /// The voxel holding p, as signed coordinates (may be outside the grid).
+    fn cell(&self, p: DVec3) -> [i64; 3] {
+        let c = ((p - self.lo) / self.h).floor();
+        [c.x as i64, c.y as i64, c.z as i64]
+    }
+    fn inside(&self, c: [i64; 3]) -> Option<[usize; 3]> {
+        let ok = (0..3).all(|a| c[a] >= 0 && (c[a] as u64) < self.n[a] as u64);
+        ok.then(|| c.map(|v| v as usize))
+    }
+}
+
+/// Fill one object's interior. Errors only when the grid or the particle count would
+/// exceed the limits; everything odd in the Gaussians is reported in `warnings`.
+pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
+    let h = input.spacing;
+    if !(h.is_finite() && h > 0.0) {
+        return Err(FillError::BadSpacing(h));
+    }
+    let n_in = input.means.len();
+    let finite: Vec<bool> = input.means.iter().map(|m| m.is_finite()).collect();
+    let mut stats = FillStats {
+        nonfinite_means: finite.iter().filter(|f| !**f).count(),
+        ..Default::default()
+    };
+    let mut out = Fill {
+        volumes: vec![h.powi(3); n_in],
+        point_volume: h.powi(3),
+        ..Default::default()
+    };
+    let (lo, hi) = match &input.inside {
+        InsideTest::Parity => {
+            let (lo, hi) = input
+                .means
+                .iter()
+                .filter(|m| m.is_finite())
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), m| {
+                    (lo.min(m.as_dvec3()), hi.max(m.as_dvec3()))
+                });
+            (lo - 2.0 * h, hi + 2.0 * h)
+        }
+        InsideTest::Exact { lo, hi, .. } => (*lo - h, *hi + h),
+    };
+    if !(lo.is_finite() && hi.is_finite()) {
+        out.warnings
+            .push("fill: no Gaussian with a finite position; nothing filled".into());
+        out.stats = stats;
+        return Ok(out);
+    }
+    let dims = ((hi - lo) / h).ceil().max(DVec3::ONE);
+    let count = dims.element_product();
+    if count.is_nan() || count > MAX_FILL_VOXELS as f64 {
+        return Err(FillError::TooManyVoxels {
+            count,
+            nx: dims.x,
+            ny: dims.y,
+            nz: dims.z,
+            spacing: h,
+            max: MAX_FILL_VOXELS,
+        });
+    }
+    let grid = Voxels {
+        lo,
+        h,
+        n: [dims.x as usize, dims.y as usize, dims.z as usize],
+    };
+    stats.dims = grid.n;
+    let flags: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
+
+    // The voxel of each mean (u32::MAX: none), and the MEAN flags.
+    let home: Vec<u32> = input
+        .means
+        .par_iter()
+        .map(|m| {
+            if !m.is_finite() {
+                return u32::MAX;
+            }
+            match grid.inside(grid.cell(m.as_dvec3())) {
+                Some(c) => {
+                    let idx = grid.index(c);
+                    flags[idx].fetch_or(MEAN, Relaxed);
+                    idx as u32
+                }
+                None => u32::MAX,
+            }
+        })
+        .collect();
+
+    let solid: Vec<bool> = match &input.inside {
+        InsideTest::Exact { contains, .. } => (0..grid.len())
+            .into_par_iter()
+            .map(|idx| contains(grid.centre(grid.coords(idx))))
+            .collect(),
+        InsideTest::Parity => {
+            let (degenerate, clipped) = mark_band(input, &grid, &flags);
+            stats.degenerate = degenerate;
+            stats.clipped = clipped;
+            stats.band_voxels = flags
+                .par_iter()
+                .filter(|f| f.load(Relaxed) & BAND != 0)
+                .count();
+            let votes: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
+            for axis in 0..3 {
+                let (hit, odd) = vote_axis(&grid, &flags, &votes, axis);
+                stats.rays_hit += hit;
+                stats.odd_rays += odd;
+            }
+            votes
+                .par_iter()
+                .zip(flags.par_iter())
+                .map(|(v, f)| {
+                    let v = v.load(Relaxed);
+                    let (inside, conclusive) = (v & 15, v >> 4);
+                    f.load(Relaxed) & BAND == 0 && 2 * inside > conclusive
+                })
+                .collect()
+        }
+    };
+    stats.solid_voxels = solid.iter().filter(|s| **s).count();
+
+    // Fill voxels: solid, no Gaussian there, inside the selection.
+    let fill_idx: Vec<usize> = (0..grid.len())
+        .into_par_iter()
+        .filter(|&idx| {
+            solid[idx]
+                && flags[idx].load(Relaxed) & MEAN == 0
+                && (input.region)(grid.centre(grid.coords(idx)))
+        })
+        .collect();
+    if fill_idx.len() > MAX_FILL_PARTICLES {
+        return Err(FillError::TooManyParticles {
+            count: fill_idx.len(),
+            spacing: h,
+            max: MAX_FILL_PARTICLES,
+        });
+    }
+    out.points = fill_idx
+        .iter()
+        .map(|&idx| grid.centre(grid.coords(idx)))
+        .collect();
+
+    // Volumes: each voxel holding means shares h³ among them.
+    let mut by_voxel: Vec<(u32, u32)> = home
+        .iter()
+        .enumerate()
+        .filter(|(_, v)| **v != u32::MAX)
+        .map(|(i, v)| (*v, i as u32))
+        .collect();
+    by_voxel.par_sort_unstable();
+    for run in by_voxel.chunk_by(|a, b| a.0 == b.0) {
+        let share = h.powi(3) / run.len() as f64;
+        for &(_, i) in run {
+            out.volumes[i as usize] = share;
+        }
+    }
+
+    // Appearance donors: the nearest Gaussian with a finite mean.
+    let donors: Vec<u32> = (0..n_in as u32).filter(|&i| finite[i as usize]).collect();
+    if !out.points.is_empty() && !donors.is_empty() {
+        let coords: Vec<[f32; 3]> = donors
+            .iter()
+            .map(|&i| input.means[i as usize].to_array())
+            .collect();
+        let tree: ImmutableKdTree<f32, u32, 3, 32> = ImmutableKdTree::new_from_slice(&coords);
+        let one = NonZero::new(1).expect("1 > 0");
+        out.nearest = out
+            .points
+            .par_iter()
+            .map(|p| {
+                let found = tree.nearest_n::<SquaredEuclidean>(&p.as_vec3().to_array(), one);
+                donors[found.first().map_or(0, |nb| nb.item as usize)]
+            })
+            .collect();
+    } else {
+        out.points.clear();
+    }
+
+    let w = &mut out.warnings;
+    if stats.nonfinite_means > 0 {
+        w.push(format!(
+            "fill: {} Gaussians with a non-finite position ignored",
+            stats.nonfinite_means
+        ));
+    }
+    if stats.degenerate > 0 {
+        w.push(format!(
+            "fill: {} Gaussians with a degenerate covariance (non-finite or not positive semi-definite) counted as points",
+            stats.degenerate
+        ));
+    }
+    if stats.clipped > 0 {
+        w.push(format!(
+            "fill: {} Gaussians wider than {MAX_REACH_VOXELS} spacings ({:.3e}) clipped to that reach",
+            stats.clipped,
+            MAX_REACH_VOXELS as f64 * h
+        ));
+    }
+    if matches!(input.inside, InsideTest::Parity) {
+        let share = stats.odd_rays as f64 / stats.rays_hit.max(1) as f64;
+        if share > OPEN_RAY_SHARE {
+            w.push(format!(
+                "fill: {:.0}% of the rays that meet the surface cross it an odd number of times: the surface looks open (or has holes wider than the spacing {h:.3e}); only voxels that rays agree on are filled",
+                100.0 * share
+            ));
+        }
+    }
+    if stats.solid_voxels == 0 {
+        w.push(format!(
+            "fill: no interior found at spacing {h:.3e} (no closed surface, or the object is thinner than two spacings); nothing added"
+        ));
+    }
+    out.stats = stats;
+    Ok(out)
+}
+
+/// Mark the voxels each Gaussian's density reaches (BAND). Returns (degenerate, clipped).
+fn mark_band(input: &FillInput, grid: &Voxels, flags: &[AtomicU8]) -> (usize, usize) {
+    let h = grid.h;
+    let degenerate = AtomicUsize::new(0);
+    let clipped = AtomicUsize::new(0);
+    (0..input.means.len()).into_par_iter().for_each(|i| {
+        let m = input.means[i];
+        if !m.is_finite() {
+            return;
+        }
+        let mu = m.as_dvec3();
+        let centre = grid.cell(mu);
+        let mark = |c: [i64; 3]| {
+            if let Some(c) = grid.inside(c) {
+                flags[grid.index(c)].fetch_or(BAND, Relaxed);
+            }
+        };
+        let sigma = mat3_from_sym3(input.covariances[i]).as_dmat3()
+            + DMat3::from_diagonal(DVec3::splat(0.25 * h * h));
+        let Some(inv) = spd_inverse(sigma) else {
+            degenerate.fetch_add(1, Relaxed);
+            mark(centre);
+            return;
+        };
+        let omega = f64::from(input.opacities[i]);
+        let q_max = if omega.is_finite() && omega > BAND_ALPHA {
+            2.0 * (omega / BAND_ALPHA).ln()
+        } else {
+            0.0
+        };
+        let mut lo = [0i64; 3];
+        let mut hi = [0i64; 3];
+        let mut was_clipped = false;
+        let diag = [sigma.x_axis.x, sigma.y_axis.y, sigma.z_axis.z];
+        for a in 0..3 {
+            let e = (q_max * diag[a]).sqrt();
+            let (l, u) = (
+                ((mu[a] - e - grid.lo[a]) / h).floor(),
+                ((mu[a] + e - grid.lo[a]) / h).floor(),
+            );
+            let r = MAX_REACH_VOXELS as f64;
+            let c = centre[a] as f64;
+            if l < c - r || u > c + r {
+                was_clipped = true;
+            }
+            lo[a] = l.max(c - r) as i64;
+            hi[a] = u.min(c + r) as i64;
+        }
+        if was_clipped {
+            clipped.fetch_add(1, Relaxed);
+        }
+        mark(centre);
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let Some(c) = grid.inside([x, y, z]) else {
+                        continue;
+                    };
+                    let d = grid.centre(c) - mu;
+                    if d.dot(inv * d) <= q_max {
+                        flags[grid.index(c)].fetch_or(BAND, Relaxed);
+                    }
+                }
+            }
+        }
+    });
+    (degenerate.into_inner(), clipped.into_inner())
+}
+
+/// The inverse of a symmetric matrix when it is finite and positive definite (Cholesky).
+fn spd_inverse(s: DMat3) -> Option<DMat3> {
+    if !s.is_finite() {
+        return None;
+    }
+    let (a, b, c) = (s.x_axis.x, s.y_axis.x, s.z_axis.x);
+    let (d, e, f) = (s.y_axis.y, s.z_axis.y, s.z_axis.z);
+    let l00 = a.sqrt();
+    if a.is_nan() || a <= 0.0 {
+        return None;
+    }
+    let l10 = b / l00;
+    let l20 = c / l00;
+    let t = d - l10 * l10;
+    if t.is_nan() || t <= 0.0 {
+        return None;
+    }
+    let l11 = t.sqrt();
+    let l21 = (e - l20 * l10) / l11;
+    let t = f - l20 * l20 - l21 * l21;
+    if t.is_nan() || t <= 0.0 {
+        return None;
+    }
+    let inv = s.inverse();
+    inv.is_finite().then_some(inv)
+}
+
+/// Walk every ray along `axis`; add one inside vote (low nibble) and one conclusive vote
+/// (high nibble) per voxel of each ray with an even number of crossings. Returns (rays
+/// meeting the surface, odd rays).
+fn vote_axis(grid: &Voxels, flags: &[AtomicU8], votes: &[AtomicU8], axis: usize) -> (usize, usize) {
+    let (b, c) = ((axis + 1) % 3, (axis + 2) % 3);
+    let (nb, nc, na) = (grid.n[b], grid.n[c], grid.n[axis]);
+    let at = |ib: usize, ic: usize, ia: usize| {
+        let mut i = [0; 3];
+        i[axis] = ia;
+        i[b] = ib;
+        i[c] = ic;
+        grid.index(i)
+    };
+    (0..nb * nc)
+        .into_par_iter()
+        .map(|ray| {
+            let (ib, ic) = (ray % nb, ray / nb);
+            let band = |ia: usize| flags[at(ib, ic, ia)].load(Relaxed) & BAND != 0;
+            let mut runs = 0usize;
+            let mut prev = false;
+            for ia in 0..na {
+                let now = band(ia);
+                if now && !prev {
+                    runs += 1;
+                }
+                prev = now;
+            }
+            if runs == 0 {
+                // Misses the surface: all outside, conclusively.
+                for ia in 0..na {
+                    votes[at(ib, ic, ia)].fetch_add(16, Relaxed);
+                }
+                return (0, 0);
+            }
+            if runs % 2 == 1 {
+                return (1, 1);
+            }
+            let mut crossings = 0usize;
+            let mut prev = false;
+            for ia in 0..na {
+                let now = band(ia);
+                if now && !prev {
+                    crossings += 1;
+                }
+                prev = now;
+                if !now {
+                    let inside = crossings % 2 == 1;
+                    votes[at(ib, ic, ia)].fetch_add(16 + u8::from(inside), Relaxed);
+                }
+            }
+            (1, 0)
+        })
+        .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1))
+}
