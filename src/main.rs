@@ -13,6 +13,7 @@ use splatter::gpu::{BackendChoice, GpuContext};
 use splatter::limits;
 use splatter::output::manifest::{manifest_path, FrameTiming, Manifest, ManifestWriter, Settings};
 use splatter::output::{frame_path, FrameWriter, Progress};
+use splatter::relight::gpu_normals::GpuNormals;
 use splatter::render::GpuRenderer;
 use splatter::scene::simulation::SimulationSetup;
 use splatter::scene::{self, BuildReport, CameraPath, Scene};
@@ -530,6 +531,17 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         }
         None => None,
     };
+    // Simulated objects whose normals are recomputed every frame, on the GPU.
+    let gpu_normals = match (&lighting, &setup) {
+        (Some(l), Some(s)) if !l.recompute.is_empty() => Some(GpuNormals::new(
+            &gpu,
+            &renderer,
+            &l.recomputed_objects(&splats),
+            s.grid.lo.as_vec3(),
+            s.grid.hi().as_vec3(),
+        )?),
+        _ => None,
+    };
 
     let settings = Settings {
         width,
@@ -632,17 +644,10 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             }
             if let Some(l) = &lighting {
                 renderer.set_lights(&l.lights.at(frame as f32 / scene.output.fps));
-                if !l.recompute.is_empty() {
-                    // Normals in the deformed configuration (new fracture faces included).
-                    let means: Vec<Vec3> = renderer
-                        .read_gaussians(&gpu)?
-                        .iter()
-                        .map(|g| Vec3::new(g.mean_opacity[0], g.mean_opacity[1], g.mean_opacity[2]))
-                        .collect();
-                    for (start, normals) in l.recompute_normals(&means) {
-                        renderer.update_normals(&gpu, start, &normals)?;
-                    }
-                }
+            }
+            if let Some(n) = &gpu_normals {
+                // Normals in the deformed configuration (new fracture faces included).
+                n.run(&gpu)?;
             }
             let camera = path.camera(frame);
             let (image, timings) = renderer.render_timed(&gpu, &camera, background)?;

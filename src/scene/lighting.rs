@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::path::KeyedPoint;
 use super::{BuildReport, Scene, SceneError};
+use crate::relight::gpu_normals::{spacing_of, RecomputedObject};
 use crate::relight::normals::{pca_normals, DEFAULT_K};
 use crate::relight::shadow::VolumeGrid;
 use crate::relight::{oct_encode, PointLight, ShadingParams, MAX_LIGHTS};
@@ -45,8 +46,7 @@ pub struct LightingSpec {
     pub normal_neighbours: usize,
     /// How simulated objects keep their normals: `transport` (n = F⁻ᵀ n₀ on the GPU, in
     /// the derive pass: free, and exact while the material deforms smoothly), `recompute`
-    /// (PCA in the deformed configuration every frame: follows fracture faces, at the cost
-    /// of a readback and a k-NN search per frame on the CPU), or `auto`: recompute for
+    /// (PCA in the deformed configuration every frame, on the GPU: follows fracture faces), or `auto`: recompute for
     /// objects that can fracture (NACC), transport for elastic ones. Default `auto`.
     #[serde(default)]
     pub simulated_normals: NormalMode,
@@ -303,19 +303,20 @@ pub struct SceneLighting {
     /// Seconds spent on PCA normals.
     pub normals_seconds: f64,
     /// The simulated objects' Gaussian ranges whose normals are recomputed every frame
-    /// (empty in `transport` mode).
+    /// on the GPU (`relight::gpu_normals`; empty in `transport` mode).
     pub recompute: Vec<std::ops::Range<usize>>,
-    /// Neighbours per PCA normal.
-    pub k: usize,
 }
 
 impl SceneLighting {
-    /// PCA normals of each recomputed object from the Gaussians' current `means` (all of
-    /// the run's Gaussians): (first Gaussian, normals) per object.
-    pub fn recompute_normals(&self, means: &[Vec3]) -> Vec<(usize, Vec<Vec3>)> {
+    /// The objects whose normals the GPU recomputes every frame, with their Gaussians'
+    /// spacing at rest (from `splats`, the uploaded Gaussians).
+    pub fn recomputed_objects(&self, splats: &Splats) -> Vec<RecomputedObject> {
         self.recompute
             .iter()
-            .map(|r| (r.start, pca_normals(&means[r.clone()], self.k)))
+            .map(|r| RecomputedObject {
+                range: r.clone(),
+                spacing: spacing_of(&splats.means[r.clone()]),
+            })
             .collect()
     }
 }
@@ -408,7 +409,6 @@ pub fn prepare(
         lights,
         normals_seconds,
         recompute,
-        k: spec.normal_neighbours,
     }))
 }
 
@@ -473,6 +473,5 @@ pub fn prepare_state(scene: &Scene, splats: &Splats) -> Result<Option<SceneLight
         lights: scene_lights(spec),
         normals_seconds,
         recompute: Vec::new(),
-        k: spec.normal_neighbours,
     }))
 }

@@ -1,0 +1,40 @@
+// Shared declarations of the GPU PCA normals (`relight::gpu_normals`): a uniform hash grid
+// over the recomputed Gaussians, cells at least one neighbourhood radius wide, so that the
+// neighbours within the radius lie in the 27 cells around a Gaussian's own. Mirrored by
+// `NormalsParams` / `NormalObject` in src/relight/gpu_normals.rs (layout test).
+// Concatenated after shaders/common.wgsl, shaders/render/lighting.wgsl and the sim math.
+
+struct NormalsParams {
+    // xyz: grid origin, w: cell size h
+    lo_h: vec4<f32>,
+    // xyz: cells per axis, w: number of recomputed Gaussians
+    dims_count: vec4<u32>,
+    // index of the first recomputed Gaussian in the renderer's buffers
+    offset: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Per object: the neighbourhood radius and the surface-layer depth of the refit.
+struct NormalObject {
+    radius: f32,
+    layer: f32,
+    _pad0: f32,
+    _pad1: f32,
+}
+
+@group(0) @binding(0) var<storage, read> params: NormalsParams;
+
+fn normals_cell(p: vec3<f32>) -> vec3<i32> {
+    let rel = (p - params.lo_h.xyz) / params.lo_h.w;
+    let top = vec3<f32>(params.dims_count.xyz) - 1.0;
+    // NaN-safe: select keeps finite values, anything else goes to cell 0.
+    let ok = rel == rel;
+    return vec3<i32>(clamp(select(vec3<f32>(0.0), floor(rel), ok), vec3<f32>(0.0), top));
+}
+
+fn normals_cell_index(c: vec3<i32>) -> u32 {
+    let d = params.dims_count.xyz;
+    return u32(c.x) + d.x * (u32(c.y) + d.y * u32(c.z));
+}
