@@ -480,7 +480,7 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         &scene,
         &splats,
         &report,
-        setup.is_some(),
+        setup.as_ref().map(|s| s.parts.as_slice()),
         setup
             .as_ref()
             .map(|s| (s.grid.lo.as_vec3(), s.grid.hi().as_vec3())),

@@ -9,6 +9,7 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::path::KeyedPoint;
+use super::simulation::{MaterialSpec, PartKind, SplatPart};
 use super::{BuildReport, Scene, SceneError};
 use crate::relight::gpu_normals::{spacing_of, RecomputedObject};
 use crate::relight::normals::{pca_normals, DEFAULT_K};
@@ -322,15 +323,16 @@ impl SceneLighting {
 }
 
 /// The relighting of `scene` whose Gaussians `splats` hold the objects in the order the
-/// run uploads them: file order, or — when `simulating` — static objects first, then the
-/// simulated ones (see `simulation::prepare`); `report` gives each object's count. None when
+/// run uploads them: file order with the counts of `report`, or — when simulating — the
+/// simulation's `parts` (static runs first, then each simulated object's selected
+/// Gaussians and fill; see `simulation::prepare`). None when
 /// the scene has no `lighting` block. `extra_bounds` (the simulation domain) widens the
 /// shadow volume to cover everything that may move.
 pub fn prepare(
     scene: &Scene,
     splats: &Splats,
     report: &BuildReport,
-    simulating: bool,
+    parts: Option<&[SplatPart]>,
     extra_bounds: Option<(Vec3, Vec3)>,
 ) -> Result<Option<SceneLighting>, SceneError> {
     let Some(spec) = &scene.lighting else {
@@ -338,49 +340,79 @@ pub fn prepare(
     };
     let o = scene.origin.as_str();
     spec.validate(o)?;
-    let order: Vec<usize> = if simulating {
-        (0..scene.objects.len())
-            .filter(|i| scene.objects[*i].physics.is_none())
-            .chain((0..scene.objects.len()).filter(|i| scene.objects[*i].physics.is_some()))
-            .collect()
-    } else {
-        (0..scene.objects.len()).collect()
-    };
+    // Runs of one object's Gaussians: the simulation's parts (a simulated object's
+    // selected Gaussians and its fill merged into one run), or whole objects in file order.
+    let mut runs: Vec<(usize, std::ops::Range<usize>, bool)> = Vec::new();
+    match parts {
+        Some(parts) => {
+            for p in parts {
+                let simulated = p.kind != PartKind::Static;
+                let range = p.start..p.start + p.len;
+                match runs.last_mut() {
+                    Some((obj, r, sim))
+                        if *obj == p.object && *sim == simulated && r.end == range.start =>
+                    {
+                        r.end = range.end;
+                    }
+                    _ => runs.push((p.object, range, simulated)),
+                }
+            }
+        }
+        None => {
+            let mut at = 0;
+            for (i, r) in report.objects.iter().enumerate() {
+                runs.push((i, at..at + r.gaussians, false));
+                at += r.gaussians;
+            }
+        }
+    }
+    let covered: usize = runs.iter().map(|(_, r, _)| r.len()).sum();
+    if covered != splats.len()
+        || runs
+            .iter()
+            .any(|(i, r, _)| *i >= scene.objects.len() || r.end > splats.len())
+    {
+        return Err(SceneError::invalid(
+            o,
+            "objects",
+            format!("{covered} Gaussians in the objects"),
+            format!("{} (internal: object counts do not add up)", splats.len()),
+        ));
+    }
     let start = std::time::Instant::now();
-    let mut shading = Vec::with_capacity(splats.len());
+    let mut shading = vec![[0u32; 2]; splats.len()];
     let mut materials = Vec::new();
-    let mut at = 0;
+    let mut material_of = vec![None; scene.objects.len()];
     let mut recompute = Vec::new();
-    for &i in &order {
-        let n = report.objects[i].gaussians;
-        let fractures = scene.objects[i]
+    for (i, range, simulated) in runs {
+        let obj = &scene.objects[i];
+        let material = match material_of[i] {
+            Some(m) => m,
+            None => {
+                let params = obj.shading.clone().unwrap_or_default();
+                validate_shading(o, i, &params)?;
+                materials.push(params.params());
+                let m = (materials.len() - 1) as u32;
+                material_of[i] = Some(m);
+                m
+            }
+        };
+        let fractures = obj
             .physics
             .as_ref()
-            .is_some_and(|p| matches!(p.material, super::simulation::MaterialSpec::Nacc { .. }));
+            .is_some_and(|p| matches!(p.material, MaterialSpec::Nacc { .. }));
         let recomputed = match spec.simulated_normals {
             NormalMode::Recompute => true,
             NormalMode::Transport => false,
             NormalMode::Auto => fractures,
         };
-        if simulating && scene.objects[i].physics.is_some() && recomputed {
-            recompute.push(at..at + n);
+        if simulated && recomputed {
+            recompute.push(range.clone());
         }
-        let obj = &scene.objects[i];
-        let params = obj.shading.clone().unwrap_or_default();
-        validate_shading(o, i, &params)?;
-        let material = materials.len() as u32;
-        materials.push(params.params());
-        let normals = pca_normals(&splats.means[at..at + n], spec.normal_neighbours);
-        shading.extend(normals.iter().map(|n| [oct_encode(*n), material]));
-        at += n;
-    }
-    if at != splats.len() {
-        return Err(SceneError::invalid(
-            o,
-            "objects",
-            format!("{at} Gaussians in the objects"),
-            format!("{} (internal: object counts do not add up)", splats.len()),
-        ));
+        let normals = pca_normals(&splats.means[range.clone()], spec.normal_neighbours);
+        for (slot, n) in shading[range].iter_mut().zip(&normals) {
+            *slot = [oct_encode(*n), material];
+        }
     }
     let normals_seconds = start.elapsed().as_secs_f64();
     let shadows = spec.shadows.enabled.then(|| {
