@@ -10,6 +10,7 @@
 
 pub mod fill;
 pub mod lighting;
+pub mod quality;
 mod path;
 pub mod simulation;
 
