@@ -43,6 +43,7 @@ fn cloud(n: usize) -> GaussianCloud {
         sh_degree: 3,
         sh: (0..n * 48).map(|j| 0.5 * hash(j as u64 ^ 0xABCD)).collect(),
         normals: Vec::new(),
+        ..Default::default()
     }
 }
 

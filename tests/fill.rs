@@ -87,6 +87,7 @@ fn surface_sphere(centre: Vec3, r: f32, n: usize) -> GaussianCloud {
         sh_degree: 0,
         sh: Vec::new(),
         normals: Vec::new(),
+        ..Default::default()
     };
     for i in 0..n {
         let z = 1.0 - 2.0 * (i as f32 + 0.5) / n as f32;

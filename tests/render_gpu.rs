@@ -127,6 +127,7 @@ fn isotropic_gaussian_has_the_analytic_profile() {
             opacities: vec![opacity],
             sh_degree: 0,
             sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
+            ..Default::default()
         };
         // Camera on the −z axis looking at the origin; 64×64 so the mean is at pixel (32, 32).
         let cam = Camera::look_at(
@@ -180,6 +181,7 @@ fn degree_one_colour_follows_the_view_direction() {
             opacities: vec![0.99],
             sh_degree: 1,
             sh: coeffs,
+            ..Default::default()
         };
         renderer.upload(&gpu, &splats).unwrap();
         for angle in [-80.0f32, -30.0, 0.0, 45.0, 85.0] {
@@ -310,6 +312,7 @@ fn pairs_past_the_limit_drop_the_farthest_gaussians() {
             opacities: vec![splats.opacities[0]],
             sh_degree: 0,
             sh: splats.sh[..3].to_vec(),
+            ..Default::default()
         };
         let psnr = cpu::psnr(&image.rgba, &cpu::render(&nearest, &cam, Vec3::ZERO));
         assert!(

@@ -755,6 +755,7 @@ fn two_gaussians() -> GaussianCloud {
         sh_degree: 0,
         sh: vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
         normals: vec![],
+        ..Default::default()
     }
 }
 

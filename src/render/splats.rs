@@ -6,7 +6,7 @@
 
 use glam::{Mat3, Quat, Vec3};
 
-use crate::splat::GaussianCloud;
+use crate::splat::{GaussianCloud, NO_LABEL};
 
 /// Upper triangle of a symmetric 3×3 matrix: xx, xy, xz, yy, yz, zz.
 pub type Sym3 = [f32; 6];
@@ -35,6 +35,12 @@ pub struct Splats {
     pub sh_degree: u32,
     /// Coefficient-major per Gaussian, as in [`GaussianCloud::sh`].
     pub sh: Vec<f32>,
+    /// Region label per Gaussian (an index into `label_names`, [`NO_LABEL`] for none), or
+    /// empty when no Gaussian has one. Renderers ignore it; the simulation setup uses it to
+    /// find an object's regions (see [`Splats::label_name`]).
+    pub labels: Vec<u16>,
+    /// Names of the label ids, shared by all objects: `append` merges them by name.
+    pub label_names: Vec<String>,
 }
 
 impl Splats {
@@ -64,7 +70,48 @@ impl Splats {
             opacities: cloud.opacities.clone(),
             sh_degree: cloud.sh_degree,
             sh: cloud.sh.clone(),
+            labels: cloud.labels.clone(),
+            label_names: cloud.label_names.clone(),
         }
+    }
+
+    /// The region name of Gaussian `i` (`None` when it has no label).
+    pub fn label_name(&self, i: usize) -> Option<&str> {
+        let l = *self.labels.get(i)?;
+        self.label_names.get(usize::from(l)).map(String::as_str)
+    }
+
+    /// Append `other`'s labels, renumbered into this set's names (new names are added);
+    /// the side without labels gets [`NO_LABEL`]. Call before the other arrays grow.
+    fn append_labels(&mut self, other: &Splats) {
+        if other.labels.is_empty() {
+            if !self.labels.is_empty() {
+                self.labels.resize(self.len() + other.len(), NO_LABEL);
+            }
+            return;
+        }
+        if self.labels.is_empty() {
+            self.labels = vec![NO_LABEL; self.len()];
+        }
+        let map: Vec<u16> = other
+            .label_names
+            .iter()
+            .map(
+                |name| match self.label_names.iter().position(|n| n == name) {
+                    Some(i) => i as u16,
+                    None => {
+                        self.label_names.push(name.clone());
+                        (self.label_names.len() - 1) as u16
+                    }
+                },
+            )
+            .collect();
+        self.labels.extend(
+            other
+                .labels
+                .iter()
+                .map(|&l| map.get(usize::from(l)).copied().unwrap_or(NO_LABEL)),
+        );
     }
 
     /// Append another set, padding SH to the larger degree.
@@ -76,6 +123,7 @@ impl Splats {
         self.pad_sh_degree(degree);
         let mut other = other;
         other.pad_sh_degree(degree);
+        self.append_labels(&other);
         self.means.extend(other.means);
         self.covariances.extend(other.covariances);
         self.rotations.extend(other.rotations);

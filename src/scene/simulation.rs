@@ -409,8 +409,20 @@ pub struct SimulationSetup {
     pub params: StepParams,
     /// Steps per output frame: ⌈(1/fps) / Δt⌉ (Δt shrunk to divide the frame exactly).
     pub steps_per_frame: u32,
+    /// Objects on a prescribed path: moving colliders, rendered moving rigidly (their
+    /// Gaussians are in the static runs of `parts`).
+    pub kinematic: Vec<super::kinematic::KinematicObject>,
     /// Messages for the user (a Δt above the CFL bound, …).
     pub warnings: Vec<String>,
+}
+
+impl SimulationSetup {
+    /// Region labels of a part's Gaussians (in order; `None` for an unlabelled one), e.g.
+    /// `flesh`/`rind`/`seeds` for a procedural watermelon or `"3"` for a PLY `label` 3.
+    /// Fill particles carry their region (procedural assets) or their nearest Gaussian's.
+    pub fn part_labels<'a>(&'a self, part: &SplatPart) -> impl Iterator<Item = Option<&'a str>> {
+        (part.start..part.start + part.len).map(|g| self.splats.label_name(g))
+    }
 }
 
 /// A run of one object's Gaussians in [`SimulationSetup::splats`].
@@ -771,6 +783,8 @@ fn subset(s: &Splats, r: std::ops::Range<usize>) -> Splats {
         opacities: s.opacities[r.clone()].to_vec(),
         sh_degree: s.sh_degree,
         sh: s.sh[r.start * k..r.end * k].to_vec(),
+        labels: s.labels.get(r).map(<[u16]>::to_vec).unwrap_or_default(),
+        label_names: s.label_names.clone(),
     }
 }
 
@@ -788,6 +802,12 @@ fn gather(s: &Splats, idx: &[usize]) -> Splats {
         opacities: idx.iter().map(|&i| s.opacities[i]).collect(),
         sh_degree: s.sh_degree,
         sh,
+        labels: if s.labels.is_empty() {
+            Vec::new()
+        } else {
+            idx.iter().map(|&i| s.labels[i]).collect()
+        },
+        label_names: s.label_names.clone(),
     }
 }
 
@@ -876,7 +896,7 @@ pub const FILL_OPACITY: f32 = 0.95;
 /// The fill particles as Gaussians: isotropic with σ = `SCALE_PER_SPACING` · h (as the
 /// procedural lattices, so that an exposed interior has no holes), the DC colour and rest
 /// frame of the nearest selected Gaussian (higher SH bands zero: no view-dependent
-/// highlights inside), opacity [`FILL_OPACITY`].
+/// highlights inside), opacity [`FILL_OPACITY`], and the nearest Gaussian's label.
 fn fill_gaussians(part: &Splats, f: &super::fill::Fill) -> Splats {
     let h = f.point_volume.cbrt();
     let sigma = crate::splat::procedural::SCALE_PER_SPACING * h as f32;
@@ -898,5 +918,12 @@ fn fill_gaussians(part: &Splats, f: &super::fill::Fill) -> Splats {
         opacities: vec![FILL_OPACITY; f.points.len()],
         sh_degree: part.sh_degree,
         sh,
+        // A fill particle belongs to the region of its nearest Gaussian.
+        labels: if part.labels.is_empty() {
+            Vec::new()
+        } else {
+            f.nearest.iter().map(|&d| part.labels[d as usize]).collect()
+        },
+        label_names: part.label_names.clone(),
     }
 }

@@ -29,7 +29,17 @@ pub struct GaussianCloud {
     pub sh: Vec<f32>,
     /// Optional per-Gaussian normals (PLY `nx ny nz`); empty when absent.
     pub normals: Vec<Vec3>,
+    /// Optional per-Gaussian region labels, indices into `label_names`; empty when absent.
+    /// Procedural assets label their regions (`flesh`, `rind`, …); the PLY reader fills
+    /// them from an integer vertex property `label` (or `segment`).
+    pub labels: Vec<u16>,
+    /// Name of each label id (`labels[i]` indexes this).
+    pub label_names: Vec<String>,
 }
+
+/// Label id of a Gaussian that has none, where labelled and unlabelled sets are merged
+/// (`render::Splats::append`).
+pub const NO_LABEL: u16 = u16::MAX;
 
 /// Number of SH coefficients per colour channel for a degree.
 pub const fn sh_coeff_count(degree: u32) -> usize {
@@ -102,6 +112,43 @@ impl GaussianCloud {
                 self.normals.len()
             ));
         }
+        if !self.labels.is_empty() && self.labels.len() != n {
+            return Err(format!(
+                "labels has {} entries for {n} Gaussians",
+                self.labels.len()
+            ));
+        }
+        if self.label_names.len() >= usize::from(NO_LABEL) {
+            return Err(format!(
+                "{} label names, at most {} allowed",
+                self.label_names.len(),
+                NO_LABEL - 1
+            ));
+        }
+        if let Some(l) = self
+            .labels
+            .iter()
+            .find(|&&l| usize::from(l) >= self.label_names.len())
+        {
+            return Err(format!(
+                "label {l} has no name ({} label names)",
+                self.label_names.len()
+            ));
+        }
         Ok(())
+    }
+
+    /// The region name of Gaussian `i`, `None` when the cloud has no labels.
+    pub fn label_name(&self, i: usize) -> Option<&str> {
+        let l = *self.labels.get(i)?;
+        self.label_names.get(usize::from(l)).map(String::as_str)
+    }
+
+    /// The id of the label called `name`, if the cloud has it.
+    pub fn label_id(&self, name: &str) -> Option<u16> {
+        self.label_names
+            .iter()
+            .position(|n| n == name)
+            .map(|i| i as u16)
     }
 }

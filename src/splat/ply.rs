@@ -130,7 +130,7 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
     let vdef = elements[vertex_index];
     let layout = Layout::new(vdef, file)?;
 
-    let (cloud, skipped_nonfinite, skipped_degenerate) = match format {
+    let (mut cloud, skipped_nonfinite, skipped_degenerate) = match format {
         PlyFormat::BinaryLittleEndian => {
             read_binary_body(body, &elements[..vertex_index], vdef, &layout, file)?
         }
@@ -143,6 +143,9 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
             header_line_count(&bytes[..body_start]),
         )?,
     };
+    if !cloud.labels.is_empty() {
+        name_labels(&mut cloud, &header.comments);
+    }
     let report = PlyReport {
         format,
         vertices_in_file: vdef.count,
@@ -173,7 +176,9 @@ pub fn write_ply(path: &Path, cloud: &GaussianCloud, format: PlyFormat) -> Resul
 
 /// Encode `cloud` as a standard 3DGS PLY file in memory; `name` is used in error messages.
 ///
-/// Properties (all `float`): `x y z nx ny nz f_dc_0..2 f_rest_* opacity scale_0..2 rot_0..3`.
+/// Properties (all `float`): `x y z nx ny nz f_dc_0..2 f_rest_* opacity scale_0..2 rot_0..3`,
+/// then `int label` when the cloud has labels (the label id; a header comment
+/// `comment label <id> <name>` per name lets the reader restore the names).
 /// Normals are zeros when the cloud has none; opacity is written as a logit (clamped to
 /// (1e−12, 1 − 1e−12) so that it stays finite), scale as its natural log.
 pub fn write_ply_bytes(
@@ -194,6 +199,17 @@ pub fn write_ply_bytes(
         PlyFormat::Ascii => "format ascii 1.0\n",
     });
     header.push_str("comment written by splatter\n");
+    let has_label = !cloud.labels.is_empty();
+    if has_label {
+        for (id, name) in cloud.label_names.iter().enumerate() {
+            // One token: whitespace would split the name when read back.
+            let name: String = name
+                .chars()
+                .map(|c| if c.is_whitespace() { '_' } else { c })
+                .collect();
+            let _ = writeln!(header, "comment label {id} {name}");
+        }
+    }
     let _ = writeln!(header, "element vertex {}", cloud.len());
     let mut names: Vec<String> = [
         "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
@@ -212,6 +228,9 @@ pub fn write_ply_bytes(
     for n in &names {
         let _ = writeln!(header, "property float {n}");
     }
+    if has_label {
+        header.push_str("property int label\n");
+    }
     header.push_str("end_header\n");
     let nvals = names.len();
 
@@ -220,7 +239,7 @@ pub fn write_ply_bytes(
     let mut out = header.into_bytes();
     match format {
         PlyFormat::BinaryLittleEndian => {
-            let stride = nvals * 4;
+            let stride = nvals * 4 + if has_label { 4 } else { 0 };
             let start = out.len();
             out.resize(start + n * stride, 0);
             out[start..]
@@ -232,6 +251,9 @@ pub fn write_ply_bytes(
                         encode_vertex(cloud, ci * CHUNK + j, &mut vals[..nvals]);
                         for (dst, v) in rec.chunks_exact_mut(4).zip(&vals[..nvals]) {
                             dst.copy_from_slice(&v.to_le_bytes());
+                        }
+                        if let Some(&l) = cloud.labels.get(ci * CHUNK + j) {
+                            rec[nvals * 4..].copy_from_slice(&i32::from(l).to_le_bytes());
                         }
                     }
                 });
@@ -250,6 +272,9 @@ pub fn write_ply_bytes(
                             }
                             // `Display` of f32 is the shortest string that parses back exactly.
                             let _ = write!(s, "{v}");
+                        }
+                        if let Some(l) = cloud.labels.get(i) {
+                            let _ = write!(s, " {l}");
                         }
                         s.push('\n');
                     }
@@ -400,7 +425,7 @@ impl Scalar {
     }
 }
 
-/// Most values one vertex contributes: 3 + 3 + 45 + 1 + 3 + 4 + 3 = 62.
+/// Most values one vertex contributes: 3 + 3 + 45 + 1 + 3 + 4 + 3 + 1 (label) = 63.
 const MAX_VALUES: usize = 64;
 
 /// Which vertex properties hold the values we need, in canonical order:
@@ -410,6 +435,8 @@ struct Layout {
     /// Number of `f_rest_*` values, R = 3·(K − 1).
     rest: usize,
     has_normals: bool,
+    /// Whether a scalar `label` (or `segment`) property gives region labels.
+    has_label: bool,
     /// Property index (within the `vertex` element) of each needed value.
     props: Vec<usize>,
 }
@@ -457,6 +484,14 @@ impl Layout {
         if has_normals {
             names.extend(["nx", "ny", "nz"].iter().map(|s| s.to_string()));
         }
+        // Region labels, last: `label`, else `segment` (a list property is not a label).
+        let label = ["label", "segment"].into_iter().find(|n| {
+            index_of(n)
+                .is_some_and(|i| matches!(def.properties[i].data_type, PropertyType::Scalar(_)))
+        });
+        if let Some(n) = label {
+            names.push(n.to_string());
+        }
         let missing: Vec<String> = names
             .iter()
             .filter(|n| index_of(n).is_none())
@@ -484,6 +519,7 @@ impl Layout {
             degree,
             rest,
             has_normals,
+            has_label: label.is_some(),
             props,
         })
     }
@@ -506,6 +542,8 @@ struct OutChunk<'a> {
     opacity: &'a mut [f32],
     sh: &'a mut [f32],
     normals: &'a mut [Vec3],
+    /// Raw label values, mapped to ids once all are read ([`label_ids`]).
+    labels: &'a mut [f64],
 }
 
 #[derive(Clone, Copy, Default)]
@@ -565,12 +603,20 @@ fn store(v: &[f64], lay: &Layout, out: &mut OutChunk<'_>, w: usize) -> Verdict {
         let b = o + 8;
         out.normals[w] = Vec3::new(v[b] as f32, v[b + 1] as f32, v[b + 2] as f32);
     }
+    if lay.has_label {
+        out.labels[w] = v[v.len() - 1];
+    }
     Verdict::Kept
 }
 
 /// Decode `n` vertices in parallel chunks. `gather(i, vals)` fills the canonical values of
 /// vertex `i`. Skipped vertices are compacted away; returns the cloud and the skip counts.
-fn decode<G>(n: usize, lay: &Layout, gather: G) -> Result<(GaussianCloud, usize, usize), PlyError>
+fn decode<G>(
+    n: usize,
+    lay: &Layout,
+    file: &str,
+    gather: G,
+) -> Result<(GaussianCloud, usize, usize), PlyError>
 where
     G: Fn(usize, &mut [f64]) -> Result<(), PlyError> + Sync,
 {
@@ -587,7 +633,9 @@ where
         } else {
             Vec::new()
         },
+        ..Default::default()
     };
+    let mut raw_labels = vec![0.0f64; if lay.has_label { n } else { 0 }];
 
     let mut chunks = Vec::with_capacity(n.div_ceil(CHUNK));
     {
@@ -599,6 +647,7 @@ where
             &mut cloud.sh[..],
             &mut cloud.normals[..],
         );
+        let mut labels = &mut raw_labels[..];
         while !pos.is_empty() {
             let m = pos.len().min(CHUNK);
             let (a, b) = pos.split_at_mut(m);
@@ -613,6 +662,8 @@ where
             sh = hb;
             let (na, nb) = normals.split_at_mut(if lay.has_normals { m } else { 0 });
             normals = nb;
+            let (la, lb) = labels.split_at_mut(if lay.has_label { m } else { 0 });
+            labels = lb;
             chunks.push(OutChunk {
                 pos: a,
                 scale: sa,
@@ -620,6 +671,7 @@ where
                 opacity: oa,
                 sh: ha,
                 normals: na,
+                labels: la,
             });
         }
     }
@@ -655,7 +707,10 @@ where
             cloud.rotations.copy_within(r.clone(), kept);
             cloud.opacities.copy_within(r.clone(), kept);
             if lay.has_normals {
-                cloud.normals.copy_within(r, kept);
+                cloud.normals.copy_within(r.clone(), kept);
+            }
+            if lay.has_label {
+                raw_labels.copy_within(r, kept);
             }
             cloud
                 .sh
@@ -676,7 +731,81 @@ where
     if cloud.normals.iter().all(|n| *n == Vec3::ZERO) {
         cloud.normals = Vec::new();
     }
+    raw_labels.truncate(kept);
+    (cloud.labels, cloud.label_names) = label_ids(&raw_labels, file)?;
     Ok((cloud, nonfinite, degenerate))
+}
+
+/// Map raw label values (integers in any numeric type) to dense ids, numbered in
+/// increasing value order and named by the value (`"3"`, `"-1"`).
+fn label_ids(raw: &[f64], file: &str) -> Result<(Vec<u16>, Vec<String>), PlyError> {
+    if let Some(v) = raw.iter().find(|v| !(v.fract() == 0.0 && v.abs() < 9.0e15)) {
+        return Err(PlyError::Invalid {
+            file: file.to_string(),
+            what: format!("vertex label {v}"),
+            expected: "integer labels (property `label` or `segment`)".to_string(),
+        });
+    }
+    let mut values: Vec<i64> = raw.iter().map(|&v| v as i64).collect();
+    values.sort_unstable();
+    values.dedup();
+    if values.len() >= usize::from(super::NO_LABEL) {
+        return Err(PlyError::Invalid {
+            file: file.to_string(),
+            what: format!("{} distinct vertex labels", values.len()),
+            expected: format!("at most {} distinct labels", super::NO_LABEL - 1),
+        });
+    }
+    let ids = raw
+        .iter()
+        .map(|&v| values.binary_search(&(v as i64)).unwrap_or_default() as u16)
+        .collect();
+    Ok((ids, values.iter().map(i64::to_string).collect()))
+}
+
+/// Apply the label names that the writer records in header comments
+/// (`comment label <value> <name>`), so that named regions survive a round trip, names of
+/// regions without Gaussians included (ids then follow the comments' values); other
+/// readers see only the numbers.
+fn name_labels(cloud: &mut GaussianCloud, comments: &[String]) {
+    let named: Vec<(i64, String)> = comments
+        .iter()
+        .filter_map(|c| {
+            let rest = c.trim().strip_prefix("label ")?;
+            let (value, name) = rest.trim_start().split_once(' ')?;
+            Some((value.parse().ok()?, name.trim().to_string()))
+        })
+        .collect();
+    if named.is_empty() {
+        return;
+    }
+    // Values as read (label_names holds them as strings), then those only in comments.
+    let mut values: Vec<i64> = cloud
+        .label_names
+        .iter()
+        .filter_map(|n| n.parse().ok())
+        .collect();
+    let old = values.clone();
+    values.extend(named.iter().map(|(v, _)| *v));
+    values.sort_unstable();
+    values.dedup();
+    if values.len() >= usize::from(super::NO_LABEL) {
+        return;
+    }
+    for l in &mut cloud.labels {
+        *l = values
+            .binary_search(&old[usize::from(*l)])
+            .unwrap_or_default() as u16;
+    }
+    cloud.label_names = values
+        .iter()
+        .map(|v| {
+            named
+                .iter()
+                .find(|(w, _)| w == v)
+                .map_or_else(|| v.to_string(), |(_, n)| n.clone())
+        })
+        .collect();
 }
 
 // ---------------------------------------------------------------------------------------
@@ -732,7 +861,7 @@ fn read_binary_body(
     }
     let fields: Vec<(usize, Scalar)> = lay.props.iter().map(|&i| offsets[i]).collect();
     let body = &body[..n * stride];
-    decode(n, lay, |i, vals| {
+    decode(n, lay, file, |i, vals| {
         let rec = &body[i * stride..(i + 1) * stride];
         for (v, &(off, t)) in vals.iter_mut().zip(&fields) {
             *v = t.read_le(&rec[off..]);
@@ -868,7 +997,7 @@ fn read_ascii_body(
         .map(|((name, p), s)| (name.as_str(), &p.data_type, s))
         .collect();
 
-    decode(n, lay, |i, vals| {
+    decode(n, lay, file, |i, vals| {
         let (lineno, line) = vlines[i];
         let bad = |what: String, expected: String| PlyError::Invalid {
             file: file.to_string(),

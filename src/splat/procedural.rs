@@ -205,13 +205,14 @@ impl ProceduralSpec {
         let jitter = f64::from(self.jitter) * s;
         let colors = self.region_colors();
 
-        let layers: Vec<(Vec<Vec3>, Vec<f32>)> = (0..az.count)
+        let layers: Vec<(Vec<Vec3>, Vec<f32>, Vec<u16>)> = (0..az.count)
             .into_par_iter()
             .map(|iz| {
                 let mut rng =
                     SplitMix64::new(self.seed ^ (iz as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
                 let mut pos = Vec::new();
                 let mut sh = Vec::new();
+                let mut labels = Vec::new();
                 let z = az.coord(iz);
                 for iy in 0..ay.count {
                     let y = ay.coord(iy);
@@ -225,12 +226,13 @@ impl ProceduralSpec {
                             *c += (2.0 * rng.uniform() - 1.0) * jitter;
                         }
                         let p = solid.clamp(p);
-                        let dc = self.color_at(&colors, &solid, p);
+                        let (dc, label) = self.color_at(&colors, &solid, p);
                         pos.push(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32));
                         sh.extend_from_slice(&dc);
+                        labels.push(label);
                     }
                 }
-                (pos, sh)
+                (pos, sh, labels)
             })
             .collect();
 
@@ -243,10 +245,13 @@ impl ProceduralSpec {
             sh_degree: 0,
             sh: Vec::with_capacity(3 * n),
             normals: Vec::new(),
+            labels: Vec::with_capacity(n),
+            label_names: self.region_names(),
         };
-        for (pos, sh) in layers {
+        for (pos, sh, labels) in layers {
             cloud.positions.extend(pos);
             cloud.sh.extend(sh);
+            cloud.labels.extend(labels);
         }
         Ok(cloud)
     }
@@ -310,17 +315,32 @@ impl ProceduralSpec {
         }
     }
 
-    fn color_at(&self, colors: &RegionColors, solid: &Solid, p: [f64; 3]) -> [f32; 3] {
+    /// Region names, indexed by the label ids of [`Self::color_at`]: `checker0`/`checker1`
+    /// for a checkerboard, else `shell0`, `shell1`, … (outermost first) and `core`.
+    fn region_names(&self) -> Vec<String> {
+        if self.checker.is_some() {
+            return vec!["checker0".into(), "checker1".into()];
+        }
+        (0..self.shells.len())
+            .map(|i| format!("shell{i}"))
+            .chain(std::iter::once("core".into()))
+            .collect()
+    }
+
+    /// DC colour and label id of the region at `p`.
+    fn color_at(&self, colors: &RegionColors, solid: &Solid, p: [f64; 3]) -> ([f32; 3], u16) {
         if let Some((period, dc)) = &colors.checker {
             let parity = ((p[0] / period).floor() + (p[1] / period).floor()).rem_euclid(2.0);
-            return if parity < 0.5 { dc[0] } else { dc[1] };
+            return if parity < 0.5 { (dc[0], 0) } else { (dc[1], 1) };
         }
         let depth = solid.depth(p);
         colors
             .shells
             .iter()
-            .find(|(bottom, _)| depth < *bottom)
-            .map_or(colors.core, |(_, dc)| *dc)
+            .position(|(bottom, _)| depth < *bottom)
+            .map_or((colors.core, colors.shells.len() as u16), |i| {
+                (colors.shells[i].1, i as u16)
+            })
     }
 }
 
