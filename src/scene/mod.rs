@@ -12,6 +12,7 @@ pub mod fill;
 pub mod lighting;
 pub mod quality;
 mod path;
+pub mod regions;
 pub mod simulation;
 
 use std::fmt::Display;
@@ -122,6 +123,9 @@ pub struct Scene {
     /// saved to a file); ignored by splatter.
     #[serde(rename = "$schema", default, skip_serializing_if = "Option::is_none")]
     pub schema_ref: Option<String>,
+    /// What the scene is and where it comes from (free text for readers); ignored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
     /// What to write: image size, frame count and rate, background, output folder.
     pub output: OutputSpec,
     /// The camera: intrinsics and its path through the frames.

@@ -8,6 +8,7 @@ use glam::DVec3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::regions::{ObjectRegions, ParticleKey, RegionSpec};
 use super::{BuildReport, Scene, SceneError};
 use crate::render::Splats;
 use crate::sim::cpu::{
@@ -119,6 +120,10 @@ pub struct PhysicsSpec {
     /// `{"spacing": h}`. Default off.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fill: Option<FillSpec>,
+    /// Material regions (`scene::regions`): the first region a particle lies in gives its
+    /// material (and its fill colour); particles in none keep `material`. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionSpec>,
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -136,7 +141,7 @@ pub enum SelectSpec {
 }
 
 impl SelectSpec {
-    fn validate(&self, origin: &str, field: &str) -> Result<(), SceneError> {
+    pub(crate) fn validate(&self, origin: &str, field: &str) -> Result<(), SceneError> {
         match self {
             SelectSpec::Box { lo, hi } => {
                 let (lo, hi) = (vec3(*lo), vec3(*hi));
@@ -626,12 +631,33 @@ pub fn prepare(
         dt_cfl = dt_cfl.min(cfl_dt(&material, density, dx, spec.cfl));
         let m_index = materials.len() as u32;
         materials.push(material);
+        let regions = ObjectRegions::build(o, i, &physics.regions, &object_labels(&part))?;
+        for (m, rho) in &regions.materials {
+            dt_cfl = dt_cfl.min(cfl_dt(m, *rho, dx, spec.cfl));
+            materials.push(m.clone());
+        }
+        if materials.len() > crate::sim::gpu::MAX_MATERIALS {
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics.regions"),
+                format!("{} materials in the scene", materials.len()),
+                format!(
+                    "at most {} materials over all simulated objects and their regions",
+                    crate::sim::gpu::MAX_MATERIALS
+                ),
+            ));
+        }
 
         let filled = match physics.fill.as_ref().and_then(|f| f.spacing(dx)) {
             None => None,
             Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
         };
-        let fill_splats = filled
+
+        let filled = match physics.fill.as_ref().and_then(|f| f.spacing(dx)) {
+            None => None,
+            Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
+        };
+        let mut fill_splats = filled
             .as_ref()
             .map(|f| fill_gaussians(&part, f))
             .unwrap_or_default();
@@ -672,9 +698,15 @@ pub fn prepare(
             part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>() / part.len().max(1) as f64
         };
         let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
+        let region = assign_regions(obj, &regions, &xs, &part, filled.as_ref(), &fill_splats);
+        recolour_fill(&mut fill_splats, &region[part.len()..], &regions);
         let start = particles.len();
-        for (x, volume) in xs.iter().zip(&volumes) {
+        for ((x, volume), r) in xs.iter().zip(&volumes).zip(&region) {
             let x = *x;
+            let (m_index, density) = match r {
+                None => (m_index, density),
+                Some(r) => (m_index + 1 + *r as u32, regions.materials[*r].1),
+            };
             if grid.stencil(x).is_none() {
                 return Err(SceneError::invalid(
                     o,
@@ -700,7 +732,7 @@ pub fn prepare(
         );
         for p in start..particles.len() {
             particles.c[p] = skew;
-            particles.alpha[p] = material.initial_alpha();
+            particles.alpha[p] = materials[particles.material[p] as usize].initial_alpha();
         }
         push_part(&mut out, part, i, PartKind::Simulated);
         push_part(&mut out, fill_splats, i, PartKind::Fill);
@@ -752,6 +784,78 @@ pub fn prepare(
         steps_per_frame: steps_per_frame as u32,
         warnings,
     }))
+}
+
+/// Each particle's region (None: the object's own material). Particles are the selected
+/// Gaussians `part` then the fill points. Depth below the surface: for a procedural object
+/// from its exact solid (object depth × the transform's mean scale |det M|^(1/3), exact for
+/// uniform scales); for a PLY, a Gaussian is on the surface (depth 0) and a fill particle is
+/// as deep as the distance to its nearest Gaussian.
+fn assign_regions(
+    obj: &super::ObjectSpec,
+    regions: &ObjectRegions,
+    xs: &[DVec3],
+    part: &Splats,
+    filled: Option<&super::fill::Fill>,
+    fill_splats: &Splats,
+) -> Vec<Option<usize>> {
+    if regions.is_empty() {
+        return vec![None; xs.len()];
+    }
+    let (m, t) = obj.transform.affine();
+    let (m, t) = (m.as_dmat3(), t.as_dvec3());
+    let m_inv = m.inverse();
+    let scale = m.determinant().abs().cbrt();
+    let depth = |p: usize| -> f64 {
+        if !regions.needs_depth() {
+            return 0.0;
+        }
+        if let Some(spec) = &obj.procedural {
+            return spec.depth((m_inv * (xs[p] - t)).to_array()) * scale;
+        }
+        match (p.checked_sub(part.len()), filled) {
+            (Some(j), Some(f)) => xs[p].distance(part.means[f.nearest[j] as usize].as_dvec3()),
+            _ => 0.0,
+        }
+    };
+    (0..xs.len())
+        .map(|p| {
+            regions.region_of(&ParticleKey {
+                x: xs[p],
+                depth: depth(p),
+                label: match p.checked_sub(part.len()) {
+                    None => part.labels.get(p),
+                    Some(j) => fill_splats.labels.get(j),
+                }
+                .copied()
+                .filter(|&l| l != crate::splat::NO_LABEL),
+            })
+        })
+        .collect()
+}
+
+/// The labels `part`'s Gaussians carry, as (name, id) in id order.
+fn object_labels(part: &Splats) -> Vec<(String, u16)> {
+    let mut seen = vec![false; part.label_names.len()];
+    for &l in &part.labels {
+        if let Some(s) = seen.get_mut(usize::from(l)) {
+            *s = true;
+        }
+    }
+    (0..seen.len())
+        .filter(|&l| seen[l])
+        .map(|l| (part.label_names[l].clone(), l as u16))
+        .collect()
+}
+
+/// Fill particles of a region with a `color` take it (DC only, as every fill Gaussian).
+fn recolour_fill(fill: &mut Splats, region: &[Option<usize>], regions: &ObjectRegions) {
+    let k = fill.sh_stride();
+    for (j, r) in region.iter().enumerate() {
+        if let Some(dc) = r.and_then(|r| regions.fill_dc[r]) {
+            fill.sh[j * k..j * k + 3].copy_from_slice(&dc);
+        }
+    }
 }
 
 /// Rest volume per particle without `fill`: a procedural object's lattice cell (spacing³);

@@ -262,6 +262,13 @@ impl ProceduralSpec {
         Solid::new(&self.shape).contains(p)
     }
 
+    /// Depth below the solid's surface of a point (object coordinates): the distance to
+    /// the nearest face for a point inside, 0 on the surface and outside. Material regions
+    /// select shells with it (`scene::regions`).
+    pub fn depth(&self, p: [f64; 3]) -> f64 {
+        Solid::new(&self.shape).depth(p).max(0.0)
+    }
+
     /// The solid's bounding box (object coordinates), as (lo, hi).
     pub fn bounds(&self) -> ([f64; 3], [f64; 3]) {
         match Solid::new(&self.shape) {
