@@ -103,26 +103,16 @@ pub fn render_bench(
             w,
             h,
         );
-        // Warm-up: pipelines, buffer growth.
-        let (image, _) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
-        let (mut render, mut readback, mut png) = (Vec::new(), Vec::new(), Vec::new());
-        for _ in 0..repeat {
-            let (image, t) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
-            render.push(t.render_ms);
-            readback.push(t.readback_ms);
-            let start = Instant::now();
-            crate::output::encode_png(w, h, &image.rgba)?;
-            png.push(start.elapsed().as_secs_f64() * 1e3);
-        }
+        let t = time_render(gpu, &mut renderer, &camera, repeat)?;
         writeln!(
             out,
             "{:>9} {:>11} {:>12.2} {:>12.2} {:>10.2} {:>12}",
             n,
             format!("{w}x{h}"),
-            median(&mut render),
-            median(&mut readback),
-            median(&mut png),
-            image.stats.intersections
+            t.render_ms,
+            t.readback_ms,
+            t.png_ms,
+            t.tile_pairs
         )?;
         if per_pass {
             renderer.profile_passes(true);
@@ -147,7 +137,7 @@ pub fn render_bench(
             "",
             LIT_RESOLUTION,
             lit.render_ms,
-            100.0 * (lit.render_ms / median(&mut render) - 1.0),
+            100.0 * (lit.render_ms / t.render_ms - 1.0),
             lit.shadows_ms,
             lit.shade_ms,
             lit.normals_ms
@@ -155,6 +145,41 @@ pub fn render_bench(
         out.flush()?;
     }
     Ok(())
+}
+
+/// One timed render case (`bench render`, `bench suite`): medians over the repeats.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RenderTiming {
+    pub render_ms: f64,
+    pub readback_ms: f64,
+    pub png_ms: f64,
+    pub tile_pairs: u64,
+}
+
+/// A warm-up frame (pipelines, buffer growth), then `repeat` frames: render passes
+/// (submit to GPU idle), readback and PNG encoding, each the median.
+pub fn time_render(
+    gpu: &GpuContext,
+    renderer: &mut GpuRenderer,
+    camera: &Camera,
+    repeat: usize,
+) -> Result<RenderTiming> {
+    let (image, _) = renderer.render_timed(gpu, camera, Vec3::ZERO)?;
+    let (mut render, mut readback, mut png) = (Vec::new(), Vec::new(), Vec::new());
+    for _ in 0..repeat.max(1) {
+        let (image, t) = renderer.render_timed(gpu, camera, Vec3::ZERO)?;
+        render.push(t.render_ms);
+        readback.push(t.readback_ms);
+        let start = Instant::now();
+        crate::output::encode_png(image.width, image.height, &image.rgba)?;
+        png.push(start.elapsed().as_secs_f64() * 1e3);
+    }
+    Ok(RenderTiming {
+        render_ms: median(&mut render),
+        readback_ms: median(&mut readback),
+        png_ms: median(&mut png),
+        tile_pairs: image.stats.intersections as u64,
+    })
 }
 
 /// Shadow-volume resolution of the lit benchmark.
@@ -238,75 +263,30 @@ pub fn sim_bench(
     per_pass: bool,
     out: &mut dyn Write,
 ) -> Result<()> {
-    use crate::sim::cpu::{
-        cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
-    };
-    use crate::sim::gpu::{GpuSim, P2gPath};
-    use crate::sim::nacc::{Case3Variant, NaccParams};
-    use glam::DVec3;
-
     writeln!(out, "adapter: {}", gpu.describe())?;
     writeln!(
         out,
         "{:>10} {:>6} {:>7} {:>6} {:>10} {:>16} {:>14}",
         "particles", "grid", "p2g", "steps", "ms/step", "ns/particle-step", "bytes/particle"
     )?;
-    let material = Material::Nacc {
-        params: NaccParams {
-            e: 2000.0,
-            nu: 0.4,
-            alpha0: -0.04,
-            beta: 1.0,
-            xi: 2.0,
-            m_slope: 2.36,
-        },
-        variant: Case3Variant::Continuous { k: 2.0 },
-    };
     let mut cases = vec![(20_000usize, 64u32)];
     if !quick {
         cases.push((1_000_000, 128));
     }
     for (n, cells) in cases {
-        let dx = 1.0 / f64::from(cells);
-        // A cube of 8 particles per cell in the middle of the domain, falling onto a
-        // sticky ground: contact, plasticity and free flight in one run.
-        let side = (n as f64 / 8.0).cbrt() * dx;
-        let lo = DVec3::new(0.5 - side / 2.0, 0.1, 0.5 - side / 2.0);
-        let mut particles = Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, 2.0);
-        particles.set_material(0, &material);
-        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
-        let params = StepParams {
-            dt: cfl_dt(&material, 2.0, dx, 0.4).min(1e-4),
-            gravity: DVec3::new(0.0, -9.8, 0.0),
-            boundaries: Boundaries {
-                walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
-                colliders: vec![],
-            },
-            transfer: Transfer::Apic,
-        };
-        let mut paths = vec![P2gPath::Gather];
-        if gpu.features.float32_atomics {
-            paths.push(P2gPath::Atomic);
-        }
-        for path in paths {
-            let sim = GpuSim::with_path(gpu, &particles, &grid, &[material], &params, path)?;
-            sim.step(gpu, 1)?;
-            gpu.wait()?;
-            let start = Instant::now();
-            sim.step(gpu, steps)?;
-            gpu.wait()?;
-            let secs = start.elapsed().as_secs_f64();
-            let np = particles.len() as f64;
+        let case = SimCase::new(n, cells);
+        for path in sim_paths(gpu) {
+            let (sim, t) = time_sim(gpu, &case, path, steps)?;
             writeln!(
                 out,
                 "{:>10} {:>5}³ {:>7} {:>6} {:>10.2} {:>16.1} {:>14.0}",
-                particles.len(),
+                t.particles,
                 cells,
-                format!("{path:?}").to_lowercase(),
+                t.p2g,
                 steps,
-                secs * 1e3 / f64::from(steps),
-                secs * 1e9 / (f64::from(steps) * np),
-                sim.gpu_bytes() as f64 / np
+                t.ms_per_step,
+                t.ns_per_particle_step,
+                t.gpu_bytes as f64 / t.particles as f64
             )?;
             if per_pass {
                 let active = sim.active_blocks(gpu)?.len();
@@ -332,4 +312,118 @@ pub fn sim_bench(
         }
     }
     Ok(())
+}
+
+/// The P2G paths `gpu` can run: the sorted gather everywhere, the float-atomic scatter
+/// where the adapter has SHADER_FLOAT32_ATOMIC.
+pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
+    use crate::sim::gpu::P2gPath;
+    let mut paths = vec![P2gPath::Gather];
+    if gpu.features.float32_atomics {
+        paths.push(P2gPath::Atomic);
+    }
+    paths
+}
+
+/// The simulation benchmark's input: a NACC cube (the paper's fruit parameters,
+/// `continuous` k = 2) of 8 particles per cell falling onto a sticky ground in a unit
+/// domain of `cells`³ cells: contact, plasticity and free flight in one run.
+pub struct SimCase {
+    pub particles: crate::sim::cpu::Particles,
+    pub grid: crate::sim::cpu::Grid,
+    pub material: crate::sim::cpu::Material,
+    pub params: crate::sim::cpu::StepParams,
+    pub cells: u32,
+}
+
+impl SimCase {
+    /// About `n` particles on a `cells`³ grid.
+    pub fn new(n: usize, cells: u32) -> SimCase {
+        use crate::sim::cpu::{
+            cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams,
+            Transfer,
+        };
+        use crate::sim::nacc::{Case3Variant, NaccParams};
+        use glam::DVec3;
+        let material = Material::Nacc {
+            params: NaccParams {
+                e: 2000.0,
+                nu: 0.4,
+                alpha0: -0.04,
+                beta: 1.0,
+                xi: 2.0,
+                m_slope: 2.36,
+            },
+            variant: Case3Variant::Continuous { k: 2.0 },
+        };
+        let dx = 1.0 / f64::from(cells);
+        let side = (n as f64 / 8.0).cbrt() * dx;
+        let lo = DVec3::new(0.5 - side / 2.0, 0.1, 0.5 - side / 2.0);
+        let mut particles = Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, 2.0);
+        particles.set_material(0, &material);
+        let params = StepParams {
+            dt: cfl_dt(&material, 2.0, dx, 0.4).min(1e-4),
+            gravity: DVec3::new(0.0, -9.8, 0.0),
+            boundaries: Boundaries {
+                walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
+                colliders: vec![],
+            },
+            transfer: Transfer::Apic,
+        };
+        SimCase {
+            particles,
+            grid: Grid::new(DVec3::ZERO, DVec3::ONE, dx),
+            material,
+            params,
+            cells,
+        }
+    }
+}
+
+/// One timed simulation case (`bench sim`, `bench suite`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimTiming {
+    pub particles: usize,
+    pub cells: u32,
+    pub p2g: String,
+    pub steps: u32,
+    pub ms_per_step: f64,
+    pub ns_per_particle_step: f64,
+    /// All GPU buffers of the simulation (`GpuSim::gpu_bytes`).
+    pub gpu_bytes: u64,
+}
+
+/// Runs one warm-up step, then `steps` steps in one submission, timed to GPU idle.
+pub fn time_sim(
+    gpu: &GpuContext,
+    case: &SimCase,
+    path: crate::sim::gpu::P2gPath,
+    steps: u32,
+) -> Result<(crate::sim::gpu::GpuSim, SimTiming)> {
+    use crate::sim::gpu::GpuSim;
+    let sim = GpuSim::with_path(
+        gpu,
+        &case.particles,
+        &case.grid,
+        &[case.material],
+        &case.params,
+        path,
+    )?;
+    sim.step(gpu, 1)?;
+    gpu.wait()?;
+    let start = Instant::now();
+    sim.step(gpu, steps)?;
+    gpu.wait()?;
+    let secs = start.elapsed().as_secs_f64();
+    let np = case.particles.len();
+    let timing = SimTiming {
+        particles: np,
+        cells: case.cells,
+        p2g: format!("{path:?}").to_lowercase(),
+        steps,
+        ms_per_step: secs * 1e3 / f64::from(steps),
+        ns_per_particle_step: secs * 1e9 / (f64::from(steps) * np as f64),
+        gpu_bytes: sim.gpu_bytes(),
+    };
+    Ok((sim, timing))
 }

@@ -16,3 +16,4 @@ pub mod rng;
 pub mod scene;
 pub mod sim;
 pub mod splat;
+pub mod study;

@@ -79,6 +79,54 @@ enum BenchWhat {
         #[arg(long)]
         per_pass: bool,
     },
+    /// The sim, render and end-to-end benchmarks in one run: seconds per frame of each
+    /// paper example under scenes/ next to the paper's column (SPEC §9), written to
+    /// OUT/data/bench_suite.{json,md} (docs/performance.md).
+    Suite(Box<SuiteArgs>),
+    /// Convergence study and stability atlas on the CPU reference step: JSON and tables
+    /// in OUT/data/, charts in OUT/images/ (docs/accuracy.md).
+    Accuracy {
+        /// Output root (data/ and images/ go under it).
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+        /// Which part to run.
+        #[arg(long, value_enum, default_value = "all")]
+        only: AccuracyPart,
+        /// Tiny sweeps (a smoke run; the numbers are not the documented ones).
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum AccuracyPart {
+    All,
+    Convergence,
+    Atlas,
+}
+
+#[derive(clap::Args)]
+struct SuiteArgs {
+    /// Output root (the JSON and the table go to OUT/data/).
+    #[arg(long, default_value = "docs")]
+    out: PathBuf,
+    /// Small cases only and 3 frames per example (a CPU machine).
+    #[arg(long)]
+    quick: bool,
+    /// Coarsen each example scene by this factor (dx and spacings × s: N / s³).
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Frames per example (frame 0 plus frames-1 timed frames); default 6, 3 with --quick.
+    #[arg(long)]
+    frames: Option<u32>,
+    /// Image size of the end-to-end runs.
+    #[arg(long, default_value_t = 480)]
+    width: u32,
+    #[arg(long, default_value_t = 360)]
+    height: u32,
+    /// Directory of the example scenes.
+    #[arg(long, default_value = "scenes")]
+    scenes: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -214,7 +262,44 @@ fn run(cli: Cli) -> Result<()> {
                 &mut std::io::stdout(),
             )
         }
+        Some(Command::Bench {
+            what: BenchWhat::Suite(args),
+        }) => bench_suite(cli.backend, &args),
+        Some(Command::Bench {
+            what: BenchWhat::Accuracy { out, only, quick },
+        }) => {
+            use splatter::study::Part;
+            let part = match only {
+                AccuracyPart::All => Part::All,
+                AccuracyPart::Convergence => Part::Convergence,
+                AccuracyPart::Atlas => Part::Atlas,
+            };
+            splatter::study::run_accuracy(part, quick, &out, &mut std::io::stderr())
+        }
     }
+}
+
+fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
+    if !(args.scale > 0.0 && args.scale.is_finite()) {
+        bail!("--scale {}: expected a positive factor", args.scale);
+    }
+    let gpu = GpuContext::new(backend)?;
+    let opts = splatter::study::suite::SuiteOptions {
+        quick: args.quick,
+        scale: args.scale,
+        frames: args
+            .frames
+            .unwrap_or(if args.quick { 3 } else { 6 })
+            .max(2),
+        width: args.width,
+        height: args.height,
+        sim_steps: 20,
+        repeat: if args.quick { 3 } else { 5 },
+        scenes: args.scenes.clone(),
+    };
+    let out = args.out.join("data");
+    splatter::study::suite::run_suite(&gpu, &opts, &out, &mut std::io::stderr())?;
+    Ok(())
 }
 
 impl RenderArgs {
@@ -234,6 +319,7 @@ impl RenderArgs {
             checkpoint_every: 10,
             from_states: None,
             video: None,
+            quality: scene::quality::Quality::Standard,
         }
     }
 }

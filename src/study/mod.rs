@@ -1,0 +1,96 @@
+//! Speed against accuracy (issue 6): `splatter bench suite` ([`suite`]) and
+//! `splatter bench accuracy` — the convergence study ([`convergence`]) and the stability
+//! atlas ([`atlas`]), written as JSON (`OUT/data/`), markdown tables next to it and PNG
+//! charts (`OUT/images/`). The charts and tables are drawn from the JSON as written and
+//! read back, so their numbers are the JSON's.
+
+pub mod atlas;
+pub mod chart;
+pub mod convergence;
+pub mod fit;
+pub mod runner;
+pub mod suite;
+pub mod tables;
+
+use std::io::Write;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use serde::{de::DeserializeOwned, Serialize};
+
+/// What `bench accuracy` runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    All,
+    Convergence,
+    Atlas,
+}
+
+/// Runs the study parts and writes OUT/data/{convergence,atlas}.{json,md} and
+/// OUT/images/{convergence_dx,convergence_pareto,atlas}.png.
+pub fn run_accuracy(part: Part, quick: bool, out: &Path, log: &mut dyn Write) -> Result<()> {
+    let data = out.join("data");
+    let images = out.join("images");
+    std::fs::create_dir_all(&data)?;
+    std::fs::create_dir_all(&images)?;
+    let started = Instant::now();
+    if part != Part::Atlas {
+        let report = convergence::run_convergence(convergence::ConvOptions { quick }, &mut |r| {
+            let _ = writeln!(
+                log,
+                "{} {} dx {:.4} dt {:.2e} ppc {}: error {:?}, {:.1} s ({:?})",
+                r.case, r.sweep, r.dx, r.dt, r.ppc, r.error, r.wall_s, r.outcome
+            );
+        });
+        let report: convergence::ConvergenceReport =
+            round_trip(&report, &data.join("convergence.json"))?;
+        std::fs::write(
+            data.join("convergence.md"),
+            tables::convergence_markdown(&report),
+        )?;
+        tables::convergence_charts(&report, &images)?;
+        for o in &report.orders {
+            writeln!(
+                log,
+                "order {}: {:.2} ({} points)",
+                o.case, o.order, o.points
+            )?;
+        }
+    }
+    if part != Part::Convergence {
+        let report = atlas::run_atlas(quick, &mut |r| {
+            let _ = writeln!(
+                log,
+                "atlas {} {} {}: {} (E ratio {:.3}, speed ratio {:.2}, near tip {}, q/b {:.2}) {:.1} s",
+                r.sweep,
+                r.value,
+                r.variant,
+                r.class.name(),
+                r.energy_ratio,
+                r.speed_ratio,
+                r.near_tip_returns,
+                r.near_tip_q_over_b,
+                r.wall_s
+            );
+        });
+        let report: atlas::AtlasReport = round_trip(&report, &data.join("atlas.json"))?;
+        std::fs::write(data.join("atlas.md"), tables::atlas_markdown(&report))?;
+        tables::atlas_chart(&report, &images.join("atlas.png"))?;
+    }
+    writeln!(
+        log,
+        "wrote {} and {} in {:.0} s",
+        data.display(),
+        images.display(),
+        started.elapsed().as_secs_f64()
+    )?;
+    Ok(())
+}
+
+/// Writes `value` as pretty JSON and returns what reading the file back gives: the
+/// tables and charts are made from that, so they show the file's numbers.
+fn round_trip<T: Serialize + DeserializeOwned>(value: &T, path: &Path) -> Result<T> {
+    std::fs::write(path, serde_json::to_string_pretty(value)? + "\n")?;
+    Ok(serde_json::from_str(&std::fs::read_to_string(path)?)?)
+}
