@@ -15,9 +15,10 @@ use splatter::output::manifest::{manifest_path, FrameTiming, Manifest, ManifestW
 use splatter::output::{frame_path, FrameWriter, Progress};
 use splatter::relight::gpu_normals::GpuNormals;
 use splatter::render::GpuRenderer;
+use splatter::scene::kinematic::KinematicObject;
 use splatter::scene::simulation::SimulationSetup;
 use splatter::scene::{self, BuildReport, CameraPath, Scene};
-use splatter::sim::derive::Derive;
+use splatter::sim::derive::{Derive, RigidDerive};
 use splatter::sim::gpu::{GpuSim, P2gPath, Watchdog};
 
 #[derive(Parser)]
@@ -616,12 +617,19 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                 }
                 None => &s.particles,
             };
-            let gpu_sim =
+            let mut gpu_sim =
                 GpuSim::with_path(&gpu, start, &s.grid, &s.materials, &s.params, path_p2g)?;
+            let colliders: Vec<_> = s.kinematic.iter().map(|k| k.collider.clone()).collect();
+            gpu_sim.set_kinematic(&gpu, &colliders)?;
             let derive = Derive::new(&gpu, &gpu_sim, &renderer, &s.splats, s.static_count as u32)?;
             Some((gpu_sim, derive, s))
         }
         None => None,
+    };
+    // Kinematic objects' Gaussians, moved rigidly along their paths every frame.
+    let rigid = match &setup {
+        Some(s) => kinematic_parts(&gpu, &renderer, s)?,
+        None => Vec::new(),
     };
     // Simulated objects whose normals are recomputed every frame, on the GPU.
     let gpu_normals = match (&lighting, &setup) {
@@ -692,6 +700,9 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             let mut timing = FrameTiming::default();
             if let Some((gpu_sim, derive, s)) = &sim {
                 if frame > sim_first {
+                    // The moving colliders' clock: this frame's steps start at frame − 1.
+                    let steps_before = f64::from(frame - 1) * f64::from(s.steps_per_frame);
+                    gpu_sim.set_time(steps_before * s.params.dt);
                     gpu_sim.step(&gpu, s.steps_per_frame)?;
                 }
                 let w = gpu_sim.take_watchdog(&gpu)?;
@@ -725,6 +736,11 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                     continue;
                 }
                 derive.run(&gpu)?;
+                let seconds = f64::from(frame) / f64::from(scene.output.fps);
+                for (k, r) in &rigid {
+                    let (a, b) = k.rest_to_world(seconds);
+                    r.run(&gpu, a, b)?;
+                }
             } else if args.resume && done(frame) {
                 progress.frame_done();
                 continue;
@@ -772,6 +788,22 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     )?;
     report_done(rendered, render_start, gpu_ms, workers, started);
     Ok(())
+}
+
+/// A rigid derive pass for every run of a kinematic object's Gaussians (`scene::kinematic`).
+fn kinematic_parts<'a>(
+    gpu: &GpuContext,
+    renderer: &GpuRenderer,
+    s: &'a SimulationSetup,
+) -> Result<Vec<(&'a KinematicObject, RigidDerive)>> {
+    let mut out = Vec::new();
+    for k in &s.kinematic {
+        for part in s.parts.iter().filter(|p| p.object == k.object) {
+            let r = RigidDerive::new(gpu, renderer, &s.splats, part.start as u32, part.len as u32)?;
+            out.push((k, r));
+        }
+    }
+    Ok(out)
 }
 
 /// The exit status of the `SPLATTER_FAIL_AT_FRAME` test hook.

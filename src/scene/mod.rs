@@ -9,9 +9,10 @@
 //! ([`Scene::validate`]). Errors name the file, the field path and the offending value.
 
 pub mod fill;
+pub mod kinematic;
 pub mod lighting;
+pub(crate) mod path;
 pub mod quality;
-mod path;
 pub mod regions;
 pub mod simulation;
 
@@ -310,6 +311,10 @@ pub struct ObjectSpec {
     /// Simulate this object (needs the scene's `simulation` block). Default: static.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub physics: Option<simulation::PhysicsSpec>,
+    /// Move on a prescribed rigid path and push the simulated material (a knife, a
+    /// projectile). Needs the scene's `simulation` block. Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic: Option<kinematic::KinematicSpec>,
     /// Blinn-Phong weights under the scene's `lighting`. Default: the paper's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shading: Option<lighting::ShadingSpec>,

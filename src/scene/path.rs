@@ -194,7 +194,7 @@ fn plane_basis(up: Vec3) -> (Vec3, Vec3) {
 /// Catmull-Rom generalised to non-uniform times: the derivative of the parabola through the
 /// knot and its two neighbours; end tangents are the end secants (the curve is "extended"
 /// linearly at its ends). Outside the knot range the end points hold.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 struct Hermite {
     times: Vec<f32>,
     points: Vec<Vec3>,
@@ -243,11 +243,37 @@ impl Hermite {
             }
         }
     }
+
+    /// d/dt of [`eval`](Self::eval) at `t` (in `seg`): the knot's tangent at a knot, 0 where
+    /// the curve holds (before the first knot, at or after the last, a single knot).
+    fn derivative(&self, seg: Segment, t: f32) -> Vec3 {
+        let n = self.times.len();
+        match seg {
+            Segment::At(i)
+                if (i == 0 && t < self.times[0]) || (i == n - 1 && t >= self.times[n - 1]) =>
+            {
+                Vec3::ZERO
+            }
+            Segment::At(i) => self.tangents[i],
+            Segment::Between(i, u) => {
+                let h = self.times[i + 1] - self.times[i];
+                let u2 = u * u;
+                // d/du of the Hermite basis, then du/dt = 1/h.
+                let d00 = 6.0 * u2 - 6.0 * u;
+                let d10 = 3.0 * u2 - 4.0 * u + 1.0;
+                let d01 = -6.0 * u2 + 6.0 * u;
+                let d11 = 3.0 * u2 - 2.0 * u;
+                (self.points[i] * d00 + self.points[i + 1] * d01) / h
+                    + self.tangents[i] * d10
+                    + self.tangents[i + 1] * d11
+            }
+        }
+    }
 }
 
 /// A point moving through timed keyframes on the same C¹ Hermite spline as camera
 /// positions (lights use it), plus a linearly interpolated value per keyframe.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub(crate) struct KeyedPoint {
     spline: Hermite,
     values: Vec<Vec3>,
@@ -270,6 +296,24 @@ impl KeyedPoint {
             Segment::Between(i, u) => self.values[i].lerp(self.values[i + 1], u),
         };
         (self.spline.eval(seg), value)
+    }
+
+    /// Time derivatives of [`at`](Self::at): the spline's velocity and the value's rate
+    /// (piecewise constant; 0 where both hold, before the first and after the last key).
+    pub(crate) fn rates_at(&self, t: f32) -> (Vec3, Vec3) {
+        let times = &self.spline.times;
+        let seg = locate(times, t);
+        let rate = match seg {
+            Segment::Between(i, _) => {
+                (self.values[i + 1] - self.values[i]) / (times[i + 1] - times[i])
+            }
+            // At a knot inside the range: the rate of the segment that starts there.
+            Segment::At(i) if i + 1 < times.len() && t >= times[0] => {
+                (self.values[i + 1] - self.values[i]) / (times[i + 1] - times[i])
+            }
+            Segment::At(_) => Vec3::ZERO,
+        };
+        (self.spline.derivative(seg, t), rate)
     }
 }
 

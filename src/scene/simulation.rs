@@ -377,7 +377,7 @@ impl MaterialSpec {
 }
 
 impl ConditionSpec {
-    fn build(&self, origin: &str, field: &str) -> Result<Condition, SceneError> {
+    pub(super) fn build(&self, origin: &str, field: &str) -> Result<Condition, SceneError> {
         if !(self.friction.is_finite() && self.friction >= 0.0) {
             return Err(SceneError::invalid(
                 origin,
@@ -540,6 +540,7 @@ pub fn prepare(
         acc += r.gaussians;
     }
     let range = |i: usize| starts[i]..starts[i] + report.objects[i].gaussians;
+    let kinematic = super::kinematic::build(scene, &splats, range)?;
     // Which Gaussians of each simulated object move (indices into `splats`).
     let mut moving: Vec<Option<Vec<usize>>> = vec![None; scene.objects.len()];
     for &i in &simulated {
@@ -782,6 +783,7 @@ pub fn prepare(
         materials,
         params,
         steps_per_frame: steps_per_frame as u32,
+        kinematic,
         warnings,
     }))
 }

@@ -59,12 +59,16 @@
 //! unit normal n; every node with (x_i − point)·n ≤ 0 gets the collider's condition.
 //! Colliders are applied first, walls last (so the walls' guarantee holds at corners). A
 //! node in the band of two faces gets both conditions, one after the other.
+//!
+//! **Moving colliders** (`sim::kinematic`, [`step_at`]): rigid shapes on a prescribed path,
+//! applied after the planar colliders in the collider's frame (relative velocity).
 
 use glam::{DMat3, DVec3, IVec3, UVec3};
 use rayon::prelude::*;
 
 use super::bspline::Stencil;
 use super::elasticity::{kirchhoff, ElasticModel, Lame};
+use super::kinematic::{KinematicCollider, RigidPose};
 use super::nacc::{return_map, Case3Variant, NaccParams};
 
 /// Default width, in cells, of the band of nodes next to each domain face that gets the
@@ -704,6 +708,20 @@ pub fn p2g(
 /// Grid update (SPEC §2 step 2): v_i = p_i/m_i where m_i > 0 (0 elsewhere), v_i += Δt g,
 /// then the colliders and the domain walls (module docs).
 pub fn grid_update(grid: &mut Grid, dt: f64, gravity: DVec3, boundaries: &Boundaries) {
+    grid_update_at(grid, dt, gravity, boundaries, &[], 0.0);
+}
+
+/// [`grid_update`] with moving colliders (`sim::kinematic`) at their pose at `time`
+/// seconds, applied after the planar colliders and before the walls.
+pub fn grid_update_at(
+    grid: &mut Grid,
+    dt: f64,
+    gravity: DVec3,
+    boundaries: &Boundaries,
+    kinematic: &[KinematicCollider],
+    time: f64,
+) {
+    let poses: Vec<RigidPose> = kinematic.iter().map(|k| k.motion.pose(time)).collect();
     let cells = grid.cells;
     let (lo, dx, nodes) = (grid.lo, grid.dx, grid.nodes());
     let walls = boundaries.walls;
@@ -737,6 +755,9 @@ pub fn grid_update(grid: &mut Grid, dt: f64, gravity: DVec3, boundaries: &Bounda
                 if (x - c.point).dot(c.normal) <= 0.0 {
                     v = c.condition.apply(v, c.normal);
                 }
+            }
+            for (k, pose) in kinematic.iter().zip(&poses) {
+                v = k.apply(pose, x, v);
             }
             for axis in 0..3 {
                 let e = DVec3::AXES[axis];
@@ -821,8 +842,22 @@ pub fn step(
     materials: &[Material],
     params: &StepParams,
 ) -> StepStats {
+    step_at(particles, grid, materials, params, &[], 0.0)
+}
+
+/// [`step`] starting at `time` seconds, with moving colliders at their pose at that time
+/// ([`grid_update_at`]).
+pub fn step_at(
+    particles: &mut Particles,
+    grid: &mut Grid,
+    materials: &[Material],
+    params: &StepParams,
+    kinematic: &[KinematicCollider],
+    time: f64,
+) -> StepStats {
     let escaped = p2g(particles, grid, materials, params.dt, params.transfer);
-    grid_update(grid, params.dt, params.gravity, &params.boundaries);
+    let (dt, g) = (params.dt, params.gravity);
+    grid_update_at(grid, dt, g, &params.boundaries, kinematic, time);
     g2p(particles, grid, materials, params.dt, params.gravity);
     StepStats { escaped }
 }

@@ -70,7 +70,27 @@ impl Derive {
         splats: &Splats,
         offset: u32,
     ) -> Result<Derive, GpuError> {
-        let count = sim.len();
+        let (x_mass, deformation) = sim.state_buffers();
+        Self::over(
+            gpu,
+            (x_mass, deformation),
+            sim.len(),
+            renderer,
+            splats,
+            offset,
+        )
+    }
+
+    /// As [`new`](Self::new) for `count` Gaussians whose positions (`vec4`, xyz) and
+    /// deformation gradients (`mat3x3`) are in `state`.
+    fn over(
+        gpu: &GpuContext,
+        state: (&wgpu::Buffer, &wgpu::Buffer),
+        count: u32,
+        renderer: &GpuRenderer,
+        splats: &Splats,
+        offset: u32,
+    ) -> Result<Derive, GpuError> {
         let end = offset as usize + count as usize;
         let target = renderer
             .gaussian_buffer()
@@ -113,7 +133,7 @@ impl Derive {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let kernel = Kernel::new(device, "derive", &source(), "main");
-        let (x_mass, deformation) = sim.state_buffers();
+        let (x_mass, deformation) = state;
         let stand_in = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("derive no shading"),
             size: 256,
@@ -145,6 +165,64 @@ impl Derive {
         self.record(&mut enc.begin_compute_pass(&Default::default()));
         gpu.queue.submit([enc.finish()]);
         gpu.check()
+    }
+}
+
+/// Gaussians moved rigidly (a kinematic object, `scene::kinematic`): the derive pass with
+/// F = A and x = A x₀ + b per Gaussian, so covariances, SH frames and normals turn exactly
+/// as a simulated particle's would. The positions are written from the CPU per frame (one
+/// `vec4` and one `mat3x3` per Gaussian: small next to a frame's render).
+pub struct RigidDerive {
+    derive: Derive,
+    rest: Vec<DVec3>,
+    x: wgpu::Buffer,
+    f: wgpu::Buffer,
+}
+
+impl RigidDerive {
+    /// The Gaussians `offset .. offset + count` of `splats` (all the renderer's Gaussians,
+    /// as uploaded).
+    pub fn new(
+        gpu: &GpuContext,
+        renderer: &GpuRenderer,
+        splats: &Splats,
+        offset: u32,
+        count: u32,
+    ) -> Result<RigidDerive, GpuError> {
+        let range = offset as usize..(offset + count) as usize;
+        let rest: Vec<DVec3> = splats.means[range.clone()]
+            .iter()
+            .map(|m| m.as_dvec3())
+            .collect();
+        let buffer = |label, bytes: u64| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes.max(256),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let x = buffer("rigid positions", u64::from(count) * 16);
+        let f = buffer("rigid rotations", u64::from(count) * 48);
+        let derive = Derive::over(gpu, (&x, &f), count, renderer, splats, offset)?;
+        Ok(RigidDerive { derive, rest, x, f })
+    }
+
+    /// Write the Gaussians moved by x ↦ `a` x + `b` (a rotation) into the renderer's buffer.
+    pub fn run(&self, gpu: &GpuContext, a: DMat3, b: DVec3) -> Result<(), GpuError> {
+        let x: Vec<[f32; 4]> = self
+            .rest
+            .iter()
+            .map(|p| (a * *p + b).as_vec3().extend(0.0).to_array())
+            .collect();
+        let m = a.as_mat3();
+        let col = |v: glam::Vec3| v.extend(0.0).to_array();
+        let f = vec![[col(m.x_axis), col(m.y_axis), col(m.z_axis)]; self.rest.len()];
+        if !x.is_empty() {
+            gpu.queue.write_buffer(&self.x, 0, bytemuck::cast_slice(&x));
+            gpu.queue.write_buffer(&self.f, 0, bytemuck::cast_slice(&f));
+        }
+        self.derive.run(gpu)
     }
 }
 

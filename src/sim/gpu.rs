@@ -27,6 +27,7 @@ use glam::{DMat3, DVec3, Mat3};
 use wgpu::util::DeviceExt;
 
 use super::cpu::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
+use super::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use super::wgsl::{self, NaccMaterialGpu};
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::gpu::passes::TileRanges;
@@ -36,6 +37,8 @@ use crate::render::gpu::scan::Scan;
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
+/// Moving colliders (`MAX_KINEMATIC` in `shaders/sim/step/common.wgsl`).
+pub const MAX_KINEMATIC: usize = 4;
 /// Nodes per axis of an active block (`BLOCK` in `shaders/sim/step/common.wgsl`).
 const BLOCK: u32 = 4;
 
@@ -68,6 +71,61 @@ pub struct GpuCollider {
     pub condition: GpuCondition,
 }
 
+/// `KinematicCollider` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuKinematic {
+    pub shape: u32,
+    pub margin: f32,
+    pub _pad: [u32; 2],
+    pub size: [f32; 4],
+    pub centre: [f32; 4],
+    pub condition: GpuCondition,
+}
+
+/// `KinematicPose` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuPose {
+    pub rotation: [[f32; 4]; 3],
+    pub position: [f32; 4],
+    pub velocity: [f32; 4],
+    pub angular_velocity: [f32; 4],
+}
+
+impl GpuKinematic {
+    fn from_cpu(k: &KinematicCollider) -> Self {
+        let (shape, size) = match k.shape {
+            ColliderShape::Sphere { radius } => (0, [radius, 0.0, 0.0]),
+            ColliderShape::Box { half } => (1, half.to_array()),
+            ColliderShape::Cylinder {
+                radius,
+                half_height,
+            } => (2, [radius, half_height, 0.0]),
+        };
+        GpuKinematic {
+            shape,
+            margin: k.margin as f32,
+            _pad: [0; 2],
+            size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
+            centre: k.centre.as_vec3().extend(0.0).to_array(),
+            condition: GpuCondition::from_cpu(&k.condition),
+        }
+    }
+}
+
+impl GpuPose {
+    fn from_cpu(p: &RigidPose) -> Self {
+        let v4 = |v: DVec3| v.as_vec3().extend(0.0).to_array();
+        GpuPose {
+            rotation: mat3_to_gpu(p.rotation),
+            position: v4(p.position),
+            velocity: v4(p.velocity),
+            angular_velocity: v4(p.angular_velocity),
+        }
+    }
+}
+
 /// `SimStep` of `shaders/sim/step/common.wgsl`: everything constant over a step.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -82,10 +140,14 @@ pub struct GpuStep {
     pub num_colliders: u32,
     pub band: u32,
     pub apic: u32,
-    pub _pad: [u32; 2],
+    pub num_kinematic: u32,
+    pub _pad: u32,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
     pub materials: [GpuMaterial; MAX_MATERIALS],
+    pub kinematic: [GpuKinematic; MAX_KINEMATIC],
+    /// Last: rewritten before every substep from [`GpuSim::step`]'s uploaded poses.
+    pub poses: [GpuPose; MAX_KINEMATIC],
 }
 
 impl GpuCondition {
@@ -128,6 +190,8 @@ pub enum SimSetupError {
     TooManyMaterials(usize),
     #[error("{0} colliders given; the GPU step supports at most {MAX_COLLIDERS}")]
     TooManyColliders(usize),
+    #[error("{0} moving colliders given; the GPU step supports at most {MAX_KINEMATIC}")]
+    TooManyKinematic(usize),
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
@@ -157,7 +221,8 @@ impl GpuStep {
             num_colliders: colliders.len() as u32,
             band: params.boundaries.walls.band,
             apic: u32::from(params.transfer == Transfer::Apic),
-            _pad: [0; 2],
+            num_kinematic: 0,
+            _pad: 0,
             walls: params
                 .boundaries
                 .walls
@@ -165,6 +230,8 @@ impl GpuStep {
                 .map(|c| GpuCondition::from_cpu(&c)),
             colliders: [GpuCollider::default(); MAX_COLLIDERS],
             materials: [GpuMaterial::default(); MAX_MATERIALS],
+            kinematic: [GpuKinematic::default(); MAX_KINEMATIC],
+            poses: [GpuPose::default(); MAX_KINEMATIC],
         };
         for (slot, c) in step.colliders.iter_mut().zip(colliders) {
             let n = c.normal.normalize();
@@ -321,6 +388,12 @@ pub struct GpuSim {
     binds: Binds,
     num_particles: u32,
     num_blocks: u32,
+    /// The step constants as uploaded (moving colliders are added by `set_kinematic`).
+    consts: GpuStep,
+    kinematic: Vec<KinematicCollider>,
+    dt: f64,
+    /// Start time of the next substep, in seconds (the moving colliders' clock).
+    time: std::cell::Cell<f64>,
 }
 
 fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
@@ -600,21 +673,105 @@ impl GpuSim {
             binds,
             num_particles: n,
             num_blocks: blocks,
+            consts: step,
+            kinematic: Vec::new(),
+            dt: params.dt,
+            time: std::cell::Cell::new(0.0),
         })
     }
 
+    /// Move `colliders` along their paths in every following step (replacing any set before).
+    pub fn set_kinematic(
+        &mut self,
+        gpu: &GpuContext,
+        colliders: &[KinematicCollider],
+    ) -> Result<(), SimSetupError> {
+        if colliders.len() > MAX_KINEMATIC {
+            return Err(SimSetupError::TooManyKinematic(colliders.len()));
+        }
+        self.kinematic = colliders.to_vec();
+        self.consts.num_kinematic = colliders.len() as u32;
+        self.consts.kinematic = [GpuKinematic::default(); MAX_KINEMATIC];
+        for (slot, k) in self.consts.kinematic.iter_mut().zip(colliders) {
+            *slot = GpuKinematic::from_cpu(k);
+        }
+        for (slot, k) in self.consts.poses.iter_mut().zip(colliders) {
+            *slot = GpuPose::from_cpu(&k.motion.pose(self.time.get()));
+        }
+        gpu.queue
+            .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
+        gpu.check()?;
+        Ok(())
+    }
+
+    /// Set the start time (seconds) of the next step: the moving colliders' clock, which
+    /// [`step`](Self::step) advances by Δt per substep.
+    pub fn set_time(&self, seconds: f64) {
+        self.time.set(seconds);
+    }
+
+    /// Start time of the next step, in seconds.
+    pub fn time(&self) -> f64 {
+        self.time.get()
+    }
+
+    /// The moving colliders' poses for `steps` substeps from the current time, one block of
+    /// `kinematic.len()` poses per substep; `None` without moving colliders.
+    fn upload_poses(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
+        if self.kinematic.is_empty() || steps == 0 {
+            return None;
+        }
+        let t0 = self.time.get();
+        let poses: Vec<GpuPose> = (0..steps)
+            .flat_map(|s| {
+                let t = t0 + f64::from(s) * self.dt;
+                self.kinematic
+                    .iter()
+                    .map(move |k| GpuPose::from_cpu(&k.motion.pose(t)))
+            })
+            .collect();
+        Some(
+            gpu.device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("sim kinematic poses"),
+                    contents: bytemuck::cast_slice(&poses),
+                    usage: wgpu::BufferUsages::COPY_SRC,
+                }),
+        )
+    }
+
+    /// Copy substep `s`'s poses into the step constants (outside any compute pass, so the
+    /// passes of that substep see them).
+    fn copy_poses(&self, enc: &mut wgpu::CommandEncoder, poses: &wgpu::Buffer, s: u32) {
+        let size = (self.kinematic.len() * std::mem::size_of::<GpuPose>()) as u64;
+        let at = std::mem::offset_of!(GpuStep, poses) as u64;
+        enc.copy_buffer_to_buffer(
+            poses,
+            u64::from(s) * size,
+            &self.buffers.step,
+            at,
+            Some(size),
+        );
+    }
+
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
+    /// Moving colliders get each substep's pose from one upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
         let passes = self.passes();
+        let poses = self.upload_poses(gpu, steps);
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("sim steps"),
             });
-        for _ in 0..steps {
+        for s in 0..steps {
+            if let Some(p) = &poses {
+                self.copy_poses(&mut enc, p, s);
+            }
             self.record(&mut enc, &passes);
         }
         gpu.queue.submit([enc.finish()]);
+        self.time.set(self.time.get() + f64::from(steps) * self.dt);
         gpu.check()
     }
 
@@ -878,10 +1035,25 @@ mod tests {
                 num_colliders,
                 band,
                 apic,
+                num_kinematic,
                 walls,
                 colliders,
-                materials
+                materials,
+                kinematic,
+                poses
             ]
+        );
+        assert_layout!(
+            &src,
+            GpuKinematic,
+            "KinematicCollider",
+            [shape, margin, size, centre, condition]
+        );
+        assert_layout!(
+            &src,
+            GpuPose,
+            "KinematicPose",
+            [rotation, position, velocity, angular_velocity]
         );
     }
 }

@@ -26,6 +26,7 @@ pub mod cpu;
 pub mod derive;
 pub mod elasticity;
 pub mod gpu;
+pub mod kinematic;
 pub mod nacc;
 pub mod svd;
 pub mod wgsl;

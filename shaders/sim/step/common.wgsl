@@ -4,6 +4,7 @@
 
 const MAX_MATERIALS: u32 = 16u;
 const MAX_COLLIDERS: u32 = 8u;
+const MAX_KINEMATIC: u32 = 4u;
 
 const MATERIAL_FIXED_COROTATED: u32 = 0u;
 const MATERIAL_NEO_HOOKEAN: u32 = 1u;
@@ -39,6 +40,34 @@ struct Collider {
     condition: Condition,
 }
 
+const SHAPE_SPHERE: u32 = 0u;
+const SHAPE_BOX: u32 = 1u;
+const SHAPE_CYLINDER: u32 = 2u;
+
+// A moving rigid collider (src/sim/kinematic.rs): a shape about `centre` in its own frame,
+// covering the nodes within `margin` of it.
+struct KinematicCollider {
+    // SHAPE_*
+    shape: u32,
+    margin: f32,
+    _pad0: u32,
+    _pad1: u32,
+    // sphere: x radius; box: xyz half extents; cylinder (axis z): x radius, y half height
+    size: vec4<f32>,
+    centre: vec4<f32>,
+    condition: Condition,
+}
+
+// A kinematic collider's pose during the current substep: copied into `step.poses` before
+// each substep from the poses uploaded for the whole call (GpuSim::step).
+struct KinematicPose {
+    // frame-to-world
+    rotation: mat3x3<f32>,
+    position: vec4<f32>,
+    velocity: vec4<f32>,
+    angular_velocity: vec4<f32>,
+}
+
 struct SimStep {
     // node i sits at lo + i·dx
     lo: vec3<f32>,
@@ -54,12 +83,15 @@ struct SimStep {
     // wall band width in nodes, and whether the transfer is APIC (1) or PIC (0)
     band: u32,
     apic: u32,
-    _pad0: u32,
+    num_kinematic: u32,
     _pad1: u32,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
     colliders: array<Collider, MAX_COLLIDERS>,
     materials: array<SimMaterial, MAX_MATERIALS>,
+    kinematic: array<KinematicCollider, MAX_KINEMATIC>,
+    // last: rewritten per substep
+    poses: array<KinematicPose, MAX_KINEMATIC>,
 }
 
 // Every step pass binds the step's constants here. Helpers below read this global rather

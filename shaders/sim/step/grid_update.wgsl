@@ -1,7 +1,7 @@
 // Grid update (SPEC §2 step 2), as functions called by the P2G gather right after a node's
 // mass and momentum are summed (one pass over the nodes instead of two): v_i = p_i / m_i
-// where m_i > 0, v_i += Δt g, then the planar colliders and the domain walls (nodes within
-// `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
+// where m_i > 0, v_i += Δt g, then the planar colliders, the moving (kinematic) colliders at
+// this substep's pose and the domain walls (nodes within `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
 // — never v = 0 (SPEC §2). Mirrors `cpu::grid_update` and `cpu::Condition::apply`.
 
 fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
@@ -24,6 +24,76 @@ fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return vt;
 }
 
+// Signed distance of p (relative to the shape's centre) and the outward unit normal of the
+// nearest surface point (mirrors `kinematic::ColliderShape::distance`).
+struct ShapeDistance {
+    d: f32,
+    n: vec3<f32>,
+}
+
+fn shape_distance(k: KinematicCollider, p: vec3<f32>) -> ShapeDistance {
+    var out: ShapeDistance;
+    if k.shape == SHAPE_SPHERE {
+        let len = length(p);
+        out.d = len - k.size.x;
+        out.n = select(vec3<f32>(0.0, 0.0, 1.0), p / len, len > 0.0);
+        return out;
+    }
+    if k.shape == SHAPE_BOX {
+        let q = abs(p) - k.size.xyz;
+        let sgn = select(vec3<f32>(1.0), vec3<f32>(-1.0), p < vec3<f32>(0.0));
+        let o = max(q, vec3<f32>(0.0));
+        if dot(o, o) > 0.0 {
+            out.d = length(o);
+            out.n = normalize(o * sgn);
+            return out;
+        }
+        // Inside: the nearest face.
+        var axis = 2u;
+        if q.x >= q.y && q.x >= q.z {
+            axis = 0u;
+        } else if q.y >= q.z {
+            axis = 1u;
+        }
+        out.d = q[axis];
+        out.n = vec3<f32>(0.0);
+        out.n[axis] = sgn[axis];
+        return out;
+    }
+    let r = length(p.xy);
+    let radial = select(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(p.xy / r, 0.0), r > 0.0);
+    let axial = vec3<f32>(0.0, 0.0, select(1.0, -1.0, p.z < 0.0));
+    let qr = r - k.size.x;
+    let qz = abs(p.z) - k.size.y;
+    if qr > 0.0 || qz > 0.0 {
+        let a = max(qr, 0.0);
+        let b = max(qz, 0.0);
+        out.d = sqrt(a * a + b * b);
+        out.n = (radial * a + axial * b) / out.d;
+    } else if qr > qz {
+        out.d = qr;
+        out.n = radial;
+    } else {
+        out.d = qz;
+        out.n = axial;
+    }
+    return out;
+}
+
+// Moving collider k on the node at x with velocity v: the condition on the velocity
+// relative to the rigid motion there, v_c = v_lin + ω × (x − c) (sticky: v = v_c).
+fn apply_kinematic(k: u32, x: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    let c = step.kinematic[k];
+    let pose = step.poses[k];
+    let rel = x - pose.position.xyz;
+    let sd = shape_distance(c, transpose(pose.rotation) * rel - c.centre.xyz);
+    if sd.d > c.margin {
+        return v;
+    }
+    let vc = pose.velocity.xyz + cross(pose.angular_velocity.xyz, rel);
+    return vc + apply_condition(c.condition, v - vc, pose.rotation * sd.n);
+}
+
 // Velocity of node i from its momentum and mass (0 where there is no mass).
 fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
@@ -36,6 +106,9 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
         if dot(x - c.point.xyz, c.normal.xyz) <= 0.0 {
             v = apply_condition(c.condition, v, c.normal.xyz);
         }
+    }
+    for (var k = 0u; k < step.num_kinematic; k++) {
+        v = apply_kinematic(k, x, v);
     }
     for (var axis = 0u; axis < 3u; axis++) {
         var e = vec3<f32>(0.0);
