@@ -96,6 +96,9 @@ enum BenchWhat {
         /// Tiny sweeps (a smoke run; the numbers are not the documented ones).
         #[arg(long)]
         quick: bool,
+        /// Simulate nothing: redraw the tables and charts from OUT/data/*.json.
+        #[arg(long)]
+        redraw: bool,
     },
 }
 
@@ -267,7 +270,13 @@ fn run(cli: Cli) -> Result<()> {
             what: BenchWhat::Suite(args),
         }) => bench_suite(cli.backend, &args),
         Some(Command::Bench {
-            what: BenchWhat::Accuracy { out, only, quick },
+            what:
+                BenchWhat::Accuracy {
+                    out,
+                    only,
+                    quick,
+                    redraw,
+                },
         }) => {
             use splatter::study::Part;
             let part = match only {
@@ -275,7 +284,7 @@ fn run(cli: Cli) -> Result<()> {
                 AccuracyPart::Convergence => Part::Convergence,
                 AccuracyPart::Atlas => Part::Atlas,
             };
-            splatter::study::run_accuracy(part, quick, &out, &mut std::io::stderr())
+            splatter::study::run_accuracy(part, quick, redraw, &out, &mut std::io::stderr())
         }
     }
 }

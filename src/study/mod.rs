@@ -28,8 +28,18 @@ pub enum Part {
 }
 
 /// Runs the study parts and writes OUT/data/{convergence,atlas}.{json,md} and
-/// OUT/images/{convergence_dx,convergence_pareto,atlas}.png.
-pub fn run_accuracy(part: Part, quick: bool, out: &Path, log: &mut dyn Write) -> Result<()> {
+/// OUT/images/{convergence_dx,convergence_pareto,atlas}.png. With `redraw`, nothing is
+/// simulated: the tables and charts are made again from the JSON files already there.
+pub fn run_accuracy(
+    part: Part,
+    quick: bool,
+    redraw: bool,
+    out: &Path,
+    log: &mut dyn Write,
+) -> Result<()> {
+    if redraw {
+        return redraw_from_json(part, out);
+    }
     let data = out.join("data");
     let images = out.join("images");
     std::fs::create_dir_all(&data)?;
@@ -85,6 +95,27 @@ pub fn run_accuracy(part: Part, quick: bool, out: &Path, log: &mut dyn Write) ->
         images.display(),
         started.elapsed().as_secs_f64()
     )?;
+    Ok(())
+}
+
+fn redraw_from_json(part: Part, out: &Path) -> Result<()> {
+    let (data, images) = (out.join("data"), out.join("images"));
+    std::fs::create_dir_all(&images)?;
+    if part != Part::Atlas {
+        let text = std::fs::read_to_string(data.join("convergence.json"))?;
+        let report: convergence::ConvergenceReport = serde_json::from_str(&text)?;
+        std::fs::write(
+            data.join("convergence.md"),
+            tables::convergence_markdown(&report),
+        )?;
+        tables::convergence_charts(&report, &images)?;
+    }
+    if part != Part::Convergence {
+        let text = std::fs::read_to_string(data.join("atlas.json"))?;
+        let report: atlas::AtlasReport = serde_json::from_str(&text)?;
+        std::fs::write(data.join("atlas.md"), tables::atlas_markdown(&report))?;
+        tables::atlas_chart(&report, &images.join("atlas.png"))?;
+    }
     Ok(())
 }
 

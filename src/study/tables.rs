@@ -132,7 +132,7 @@ pub fn convergence_charts(r: &ConvergenceReport, dir: &Path) -> Result<()> {
             "relative error",
         ),
         &cost_series,
-        SeriesLabelPosition::LowerLeft,
+        SeriesLabelPosition::UpperRight,
     )
 }
 
