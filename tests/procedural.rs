@@ -14,7 +14,7 @@ fn spec(shape: Shape, spacing: f32) -> ProceduralSpec {
     ProceduralSpec {
         shape,
         spacing,
-        color: [0.8, 0.2, 0.1],
+        color: Some([0.8, 0.2, 0.1]),
         shells: Vec::new(),
         checker: None,
         opacity: 0.9,
@@ -46,6 +46,7 @@ fn inside(shape: &Shape, p: Vec3) -> bool {
                 && p.z <= EPS
                 && p.z >= -thickness * (1.0 + EPS)
         }
+        other => panic!("basic shapes only (assets: tests/assets.rs), not {other:?}"),
     }
 }
 
@@ -55,6 +56,7 @@ fn volume(shape: &Shape) -> f32 {
         Shape::Box { size } => size[0] * size[1] * size[2],
         Shape::Cylinder { radius, height } => PI * radius * radius * height,
         Shape::Slab { size, thickness } => size[0] * size[1] * thickness,
+        other => panic!("basic shapes only, not {other:?}"),
     }
 }
 
@@ -125,7 +127,7 @@ fn shells_colour_by_depth_below_the_surface() {
     let flesh = [0.9, 0.1, 0.2];
     for shape in shapes() {
         let mut s = spec(shape.clone(), 0.03);
-        s.color = flesh;
+        s.color = Some(flesh);
         s.shells = vec![
             Shell {
                 depth: 0.06,
@@ -149,6 +151,7 @@ fn shells_colour_by_depth_below_the_surface() {
                     (radius - p.truncate().length()).min(0.5 * height - p.z.abs())
                 }
                 Shape::Slab { .. } => -p.z,
+                other => panic!("basic shapes only, not {other:?}"),
             };
             let got = colour_of(&c, i);
             // Leave a little slack at the boundaries for f32 round-off.
@@ -332,8 +335,8 @@ fn invalid_specs_name_the_field() {
         ),
         (with(&|s| s.spacing = 0.0), "spacing"),
         (with(&|s| s.spacing = f32::NAN), "spacing"),
-        (with(&|s| s.color = [0.5, 1.5, 0.5]), "color"),
-        (with(&|s| s.color = [0.5, f32::NAN, 0.5]), "color"),
+        (with(&|s| s.color = Some([0.5, 1.5, 0.5])), "color"),
+        (with(&|s| s.color = Some([0.5, f32::NAN, 0.5])), "color"),
         (with(&|s| s.opacity = 0.0), "opacity"),
         (with(&|s| s.opacity = 1.01), "opacity"),
         (with(&|s| s.jitter = 0.6), "jitter"),

@@ -11,7 +11,7 @@ fn spec(shape: Shape, spacing: f32) -> ProceduralSpec {
     ProceduralSpec {
         shape,
         spacing,
-        color: [0.8, 0.8, 0.8],
+        color: Some([0.8, 0.8, 0.8]),
         shells: vec![],
         checker: None,
         opacity: 0.95,

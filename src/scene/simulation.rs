@@ -660,7 +660,7 @@ pub fn prepare(
         };
         let mut fill_splats = filled
             .as_ref()
-            .map(|f| fill_gaussians(&part, f))
+            .map(|f| paint_asset_fill(obj, fill_gaussians(&part, f)))
             .unwrap_or_default();
         if let Some(f) = &filled {
             let name = obj.display_name(i);
@@ -994,6 +994,43 @@ fn fill_object(
             format!("a coarser spacing or a smaller selection: {e}"),
         )
     })
+}
+
+/// Fill particles of a procedural asset take the colour and label of the asset's region
+/// at their position rather than their nearest Gaussian's: below a watermelon's rind lies
+/// flesh, not more rind (`ProceduralSpec::region_at`). Other objects keep `fill` as it is.
+fn paint_asset_fill(obj: &super::ObjectSpec, mut fill: Splats) -> Splats {
+    let Some(spec) = obj
+        .procedural
+        .as_ref()
+        .filter(|s| s.shape.asset().is_some())
+    else {
+        return fill;
+    };
+    // Asset label ids → ids in the scene-wide names that `fill` carries.
+    let ids: Vec<u16> = spec
+        .label_names()
+        .iter()
+        .map(|n| {
+            fill.label_names
+                .iter()
+                .position(|m| m == n)
+                .map_or(crate::splat::NO_LABEL, |i| i as u16)
+        })
+        .collect();
+    let (m, t) = obj.transform.affine();
+    let (m_inv, t) = (m.as_dmat3().inverse(), t.as_dvec3());
+    let k = fill.sh_stride();
+    for j in 0..fill.len() {
+        let x = m_inv * (fill.means[j].as_dvec3() - t);
+        if let Some((label, rgb)) = spec.region_at(x.to_array()) {
+            fill.sh[j * k..j * k + 3].copy_from_slice(&crate::splat::sh::rgb_to_dc(rgb));
+            if let Some(l) = fill.labels.get_mut(j) {
+                *l = ids[usize::from(label)];
+            }
+        }
+    }
+    fill
 }
 
 /// Opacity of fill Gaussians (the procedural default: opaque when exposed).

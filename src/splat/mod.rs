@@ -1,6 +1,7 @@
 //! Gaussian clouds: the in-memory representation, PLY input/output, spherical harmonics,
 //! and procedural objects (SPEC §1, §5).
 
+pub mod assets;
 pub mod ply;
 pub mod procedural;
 pub mod sh;

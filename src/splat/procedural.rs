@@ -1,13 +1,16 @@
-//! Procedural Gaussian objects (sphere, box, cylinder, ground slab), so that scenes and
-//! tests need no downloaded captures. Each object is a jittered lattice of isotropic
-//! Gaussians filling the solid, coloured per region: `shells` by depth below the surface
-//! (outermost first), the `color` for everything deeper.
+//! Procedural Gaussian objects (sphere, box, cylinder, ground slab, and the assets of
+//! [`super::assets`]: watermelon, pumpkin, table, …), so that scenes and tests need no
+//! downloaded captures. Each object is a jittered lattice of isotropic Gaussians filling
+//! the solid, coloured and labelled per region: for the basic shapes `shells` by depth
+//! below the surface (outermost first) and the `color` for everything deeper; an asset has
+//! its own regions and palette.
 
 use glam::{Quat, Vec3};
 use rayon::prelude::*;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use super::assets::{Asset, Kind};
 use super::sh::rgb_to_dc;
 use super::GaussianCloud;
 use crate::rng::SplitMix64;
@@ -33,6 +36,92 @@ pub enum Shape {
         size: [f32; 2],
         thickness: f32,
     },
+    // Assets (`splat::assets`): `size` is the full extent [x, y, z] of the box the asset
+    // fills, centred on the origin; each has a default.
+    Watermelon {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Jelly {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Pumpkin {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Kiwi {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Pineapple {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Dragonfruit {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Toast {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Sandcastle {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Pillow {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Cloth {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Table {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Knife {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+    Projectile {
+        #[serde(default)]
+        size: Option<[f32; 3]>,
+    },
+}
+
+impl Shape {
+    /// The asset this shape names and its size as given, `None` for the basic shapes.
+    pub fn asset_kind(&self) -> Option<(Kind, Option<[f32; 3]>)> {
+        let (kind, size) = match self {
+            Shape::Sphere { .. }
+            | Shape::Box { .. }
+            | Shape::Cylinder { .. }
+            | Shape::Slab { .. } => return None,
+            Shape::Watermelon { size } => (Kind::Watermelon, size),
+            Shape::Jelly { size } => (Kind::Jelly, size),
+            Shape::Pumpkin { size } => (Kind::Pumpkin, size),
+            Shape::Kiwi { size } => (Kind::Kiwi, size),
+            Shape::Pineapple { size } => (Kind::Pineapple, size),
+            Shape::Dragonfruit { size } => (Kind::Dragonfruit, size),
+            Shape::Toast { size } => (Kind::Toast, size),
+            Shape::Sandcastle { size } => (Kind::Sandcastle, size),
+            Shape::Pillow { size } => (Kind::Pillow, size),
+            Shape::Cloth { size } => (Kind::Cloth, size),
+            Shape::Table { size } => (Kind::Table, size),
+            Shape::Knife { size } => (Kind::Knife, size),
+            Shape::Projectile { size } => (Kind::Projectile, size),
+        };
+        Some((kind, *size))
+    }
+
+    /// The asset at its size (the default when none is given).
+    pub fn asset(&self) -> Option<Asset> {
+        let (kind, size) = self.asset_kind()?;
+        Some(Asset::new(kind, size.unwrap_or(kind.default_size())))
+    }
 }
 
 /// A layer of the solid within `depth` of the surface (measured from the previous shell).
@@ -62,9 +151,11 @@ pub struct ProceduralSpec {
     pub shape: Shape,
     /// Lattice spacing: distance between neighbouring Gaussians.
     pub spacing: f32,
-    /// Colour (linear RGB in [0, 1]) of the core, below all shells.
-    pub color: [f32; 3],
-    /// Surface layers, outermost first.
+    /// Colour (RGB in [0, 1]) of the core, below all shells. Required for the basic
+    /// shapes; for an asset it optionally repaints its first region (`rind`, `jelly`, …).
+    #[serde(default)]
+    pub color: Option<[f32; 3]>,
+    /// Surface layers, outermost first (basic shapes only).
     #[serde(default)]
     pub shells: Vec<Shell>,
     /// A checkerboard on the top face region (period in world units) — used for grounds.
@@ -115,6 +206,9 @@ pub const SCALE_PER_SPACING: f32 = 0.6;
 impl ProceduralSpec {
     /// Check every field (sizes > 0, colours finite, opacity in (0, 1], …).
     pub fn validate(&self) -> Result<(), ProceduralError> {
+        if let Some((_, size)) = self.shape.asset_kind() {
+            return self.validate_asset(size);
+        }
         match &self.shape {
             Shape::Sphere { radius } => positive("radius", *radius)?,
             Shape::Box { size } => positive_all("size", size)?,
@@ -126,9 +220,17 @@ impl ProceduralSpec {
                 positive_all("size", size)?;
                 positive("thickness", *thickness)?;
             }
+            _ => unreachable!("assets are validated above"),
         }
         positive("spacing", self.spacing)?;
-        unit_color("color", &self.color)?;
+        let Some(color) = &self.color else {
+            return Err(invalid(
+                "color",
+                "missing".into(),
+                "a colour [r, g, b] in [0, 1] (required for sphere, box, cylinder and slab)",
+            ));
+        };
+        unit_color("color", color)?;
         for (i, shell) in self.shells.iter().enumerate() {
             // Past the table of static names the field is generic and `value` names the index.
             let (depth_field, color_field) = shell_fields(i);
@@ -160,6 +262,38 @@ impl ProceduralSpec {
             unit_color("checker.colors[0]", &checker.colors[0])?;
             unit_color("checker.colors[1]", &checker.colors[1])?;
         }
+        self.validate_common()
+    }
+
+    /// An asset's fields: `size` when given, `color` when given; no `shells` or `checker`
+    /// (an asset has its own regions).
+    fn validate_asset(&self, size: Option<[f32; 3]>) -> Result<(), ProceduralError> {
+        if let Some(size) = size {
+            positive_all("size", &size)?;
+        }
+        positive("spacing", self.spacing)?;
+        if let Some(color) = &self.color {
+            unit_color("color", color)?;
+        }
+        if !self.shells.is_empty() {
+            return Err(invalid(
+                "shells",
+                format!("{} shells", self.shells.len()),
+                "no shells for an asset (it has its own regions; use `color` to repaint the first)",
+            ));
+        }
+        if self.checker.is_some() {
+            return Err(invalid(
+                "checker",
+                "given".into(),
+                "no checker for an asset (only for the basic shapes)",
+            ));
+        }
+        self.validate_common()
+    }
+
+    /// Opacity and jitter, common to every shape.
+    fn validate_common(&self) -> Result<(), ProceduralError> {
         if !(self.opacity.is_finite() && self.opacity > 0.0 && self.opacity <= 1.0) {
             return Err(invalid(
                 "opacity",
@@ -225,7 +359,7 @@ impl ProceduralSpec {
                         for c in &mut p {
                             *c += (2.0 * rng.uniform() - 1.0) * jitter;
                         }
-                        let p = solid.clamp(p);
+                        let p = solid.clamp(p, [x, y, z]);
                         let (dc, label) = self.color_at(&colors, &solid, p);
                         pos.push(Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32));
                         sh.extend_from_slice(&dc);
@@ -276,6 +410,7 @@ impl ProceduralSpec {
             Solid::Box { half } => (half.map(|h| -h), half),
             Solid::Cylinder { r, half_h } => ([-r, -r, -half_h], [r, r, half_h]),
             Solid::Slab { half, t } => ([-half[0], -half[1], -t], [half[0], half[1], 0.0]),
+            Solid::Asset(a) => ((-a.half).to_array(), a.half.to_array()),
         }
     }
 
@@ -295,6 +430,19 @@ impl ProceduralSpec {
             Shape::Slab { size, thickness } => {
                 fitted(size[0]) * fitted(size[1]) * fitted(*thickness)
             }
+            // Lattice cells of the box times the most the solid fills of it.
+            _ => match self.shape.asset() {
+                Some(a) => {
+                    let cells: f64 = a
+                        .half
+                        .to_array()
+                        .iter()
+                        .map(|&h| fitted((2.0 * h) as f32))
+                        .product();
+                    (cells * a.kind.fill_fraction()).ceil()
+                }
+                None => 0.0,
+            },
         }
     }
 
@@ -311,7 +459,7 @@ impl ProceduralSpec {
             })
             .collect();
         RegionColors {
-            core: rgb_to_dc(self.color),
+            core: rgb_to_dc(self.color.unwrap_or([0.5; 3])),
             shells,
             checker: self.checker.as_ref().map(|c| {
                 (
@@ -325,6 +473,9 @@ impl ProceduralSpec {
     /// Region names, indexed by the label ids of [`Self::color_at`]: `checker0`/`checker1`
     /// for a checkerboard, else `shell0`, `shell1`, … (outermost first) and `core`.
     fn region_names(&self) -> Vec<String> {
+        if let Some((kind, _)) = self.shape.asset_kind() {
+            return kind.regions().iter().map(|r| r.to_string()).collect();
+        }
         if self.checker.is_some() {
             return vec!["checker0".into(), "checker1".into()];
         }
@@ -336,6 +487,9 @@ impl ProceduralSpec {
 
     /// DC colour and label id of the region at `p`.
     fn color_at(&self, colors: &RegionColors, solid: &Solid, p: [f64; 3]) -> ([f32; 3], u16) {
+        if let Solid::Asset(a) = solid {
+            return self.asset_color(a, p);
+        }
         if let Some((period, dc)) = &colors.checker {
             let parity = ((p[0] / period).floor() + (p[1] / period).floor()).rem_euclid(2.0);
             return if parity < 0.5 { (dc[0], 0) } else { (dc[1], 1) };
@@ -348,6 +502,40 @@ impl ProceduralSpec {
             .map_or((colors.core, colors.shells.len() as u16), |i| {
                 (colors.shells[i].1, i as u16)
             })
+    }
+}
+
+impl ProceduralSpec {
+    /// DC colour and label id of an asset's region at `p` (a point of the solid); the
+    /// first region takes `color` when the scene gives one.
+    fn asset_color(&self, a: &Asset, p: [f64; 3]) -> ([f32; 3], u16) {
+        let (label, rgb) = a.sample(p).unwrap_or((0, [0.5; 3]));
+        let rgb = match self.color {
+            Some(c) if label == 0 => c,
+            _ => rgb,
+        };
+        (rgb_to_dc(rgb), label)
+    }
+
+    /// Label id and colour (RGB) of the region at `p` (object coordinates) for an asset,
+    /// `None` for the basic shapes or outside the solid: interior fill particles take
+    /// their region from here.
+    pub fn region_at(&self, p: [f64; 3]) -> Option<(u16, [f32; 3])> {
+        let a = self.shape.asset()?;
+        let (label, rgb) = a.sample(p)?;
+        Some((
+            label,
+            if label == 0 {
+                self.color.unwrap_or(rgb)
+            } else {
+                rgb
+            },
+        ))
+    }
+
+    /// The names of the label ids `generate` gives.
+    pub fn label_names(&self) -> Vec<String> {
+        self.region_names()
     }
 }
 
@@ -364,6 +552,7 @@ enum Solid {
     Box { half: [f64; 3] },
     Cylinder { r: f64, half_h: f64 },
     Slab { half: [f64; 2], t: f64 },
+    Asset(Asset),
 }
 
 /// Lattice coordinates along one axis: `start + i · step`, i < count.
@@ -418,6 +607,7 @@ impl Solid {
                 half: size.map(|l| 0.5 * f64::from(l)),
                 t: f64::from(*thickness),
             },
+            _ => Solid::Asset(shape.asset().expect("an asset shape")),
         }
     }
 
@@ -435,6 +625,8 @@ impl Solid {
                 Axis::fitted(-half[1], half[1], s),
                 Axis::fitted(-t, 0.0, s),
             ],
+            // Cell centres, so that a sheet thinner than `spacing` still gets one layer.
+            Solid::Asset(a) => a.half.to_array().map(|h| Axis::fitted(-h, h, s)),
         }
     }
 
@@ -449,6 +641,7 @@ impl Solid {
             Solid::Slab { half, t } => {
                 p[0].abs() <= half[0] && p[1].abs() <= half[1] && (-t..=0.0).contains(&p[2])
             }
+            Solid::Asset(a) => a.contains(p),
         }
     }
 
@@ -458,11 +651,13 @@ impl Solid {
             Solid::Sphere { r } => x * x + y * y + _z * _z <= r * r,
             Solid::Cylinder { r, .. } => x * x + y * y <= r * r,
             Solid::Box { .. } | Solid::Slab { .. } => true,
+            Solid::Asset(a) => a.contains([x, y, _z]),
         }
     }
 
-    /// The nearest point of the solid (the point itself when inside).
-    fn clamp(&self, p: [f64; 3]) -> [f64; 3] {
+    /// The nearest point of the solid (the point itself when inside); for an asset, whose
+    /// nearest point has no closed form, the unjittered `lattice` point (inside).
+    fn clamp(&self, p: [f64; 3], lattice: [f64; 3]) -> [f64; 3] {
         match *self {
             Solid::Sphere { r } => {
                 let len = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
@@ -483,6 +678,13 @@ impl Solid {
                 p[1].clamp(-half[1], half[1]),
                 p[2].clamp(-t, 0.0),
             ],
+            Solid::Asset(a) => {
+                if a.contains(p) {
+                    p
+                } else {
+                    lattice
+                }
+            }
         }
     }
 
@@ -497,6 +699,7 @@ impl Solid {
                 (r - (p[0] * p[0] + p[1] * p[1]).sqrt()).min(half_h - p[2].abs())
             }
             Solid::Slab { .. } => -p[2],
+            Solid::Asset(a) => a.depth(p),
         }
     }
 }

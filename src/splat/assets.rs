@@ -1,0 +1,863 @@
+//! Procedural assets: recognisable objects (fruit, food, furniture, props) for the paper's
+//! scenes, as implicit solids with named regions.
+//!
+//! Each asset is one function of a point (object coordinates, z up, the asset centred on
+//! the origin inside the box ±`size`/2) that answers `None` outside the solid and otherwise
+//! the region's label id and colour there. That one function is the exact inside test
+//! (interior filling), the colour of lattice and fill Gaussians, and the region labels, so
+//! the three always agree. Every solid is clipped to its box, so `bounds` is exact too.
+//! Patterns (stripes, seeds, pores, grain) come from a fixed hash of position, so an asset
+//! looks the same whatever its lattice `spacing` or `seed`.
+
+use glam::DVec3;
+
+/// Display colour in [0, 1] (what the PNG shows for an unlit Gaussian).
+pub type Rgb = [f32; 3];
+
+/// The assets, as named by `"shape"` in a scene's `procedural` block.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    Watermelon,
+    Jelly,
+    Pumpkin,
+    Kiwi,
+    Pineapple,
+    Dragonfruit,
+    Toast,
+    Sandcastle,
+    Pillow,
+    Cloth,
+    Table,
+    Knife,
+    Projectile,
+}
+
+impl Kind {
+    /// Every asset, in documentation order.
+    pub const ALL: [Kind; 13] = [
+        Kind::Watermelon,
+        Kind::Jelly,
+        Kind::Pumpkin,
+        Kind::Kiwi,
+        Kind::Pineapple,
+        Kind::Dragonfruit,
+        Kind::Toast,
+        Kind::Sandcastle,
+        Kind::Pillow,
+        Kind::Cloth,
+        Kind::Table,
+        Kind::Knife,
+        Kind::Projectile,
+    ];
+
+    /// The `"shape"` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Watermelon => "watermelon",
+            Kind::Jelly => "jelly",
+            Kind::Pumpkin => "pumpkin",
+            Kind::Kiwi => "kiwi",
+            Kind::Pineapple => "pineapple",
+            Kind::Dragonfruit => "dragonfruit",
+            Kind::Toast => "toast",
+            Kind::Sandcastle => "sandcastle",
+            Kind::Pillow => "pillow",
+            Kind::Cloth => "cloth",
+            Kind::Table => "table",
+            Kind::Knife => "knife",
+            Kind::Projectile => "projectile",
+        }
+    }
+
+    /// Full extent [x, y, z] in scene units when the scene gives no `size` (the scale of
+    /// the example scenes, whose simulation domains are about a metre wide).
+    pub fn default_size(self) -> [f32; 3] {
+        match self {
+            Kind::Watermelon => [0.30, 0.22, 0.22],
+            Kind::Jelly => [0.18, 0.18, 0.18],
+            Kind::Pumpkin => [0.30, 0.30, 0.24],
+            Kind::Kiwi => [0.12, 0.09, 0.09],
+            Kind::Pineapple => [0.16, 0.16, 0.36],
+            Kind::Dragonfruit => [0.13, 0.13, 0.17],
+            Kind::Toast => [0.12, 0.11, 0.02],
+            Kind::Sandcastle => [0.40, 0.40, 0.30],
+            Kind::Pillow => [0.50, 0.34, 0.14],
+            Kind::Cloth => [0.60, 0.60, 0.01],
+            Kind::Table => [0.80, 0.50, 0.40],
+            Kind::Knife => [0.30, 0.03, 0.05],
+            Kind::Projectile => [0.06, 0.06, 0.06],
+        }
+    }
+
+    /// Region names; label ids index this. Id 0 is the region a scene's `color` repaints.
+    pub fn regions(self) -> &'static [&'static str] {
+        match self {
+            Kind::Watermelon => &["rind", "white_rind", "flesh", "seeds"],
+            Kind::Jelly => &["jelly"],
+            Kind::Pumpkin => &["skin", "flesh", "seeds", "stem"],
+            Kind::Kiwi => &["skin", "flesh", "core", "seeds"],
+            Kind::Pineapple => &["skin", "flesh", "core", "crown"],
+            Kind::Dragonfruit => &["skin", "bracts", "flesh", "seeds"],
+            Kind::Toast => &["crust", "crumb"],
+            Kind::Sandcastle => &["sand"],
+            Kind::Pillow => &["fabric", "stuffing", "seam"],
+            Kind::Cloth => &["cloth"],
+            Kind::Table => &["top", "legs"],
+            Kind::Knife => &["blade", "handle"],
+            Kind::Projectile => &["ball"],
+        }
+    }
+
+    /// An upper bound on the fraction of the bounding box the solid fills (measured on
+    /// the default shapes, with a margin for coarse lattices), for `estimated_count`.
+    pub fn fill_fraction(self) -> f64 {
+        match self {
+            Kind::Jelly | Kind::Cloth => 1.0,
+            Kind::Toast => 0.95,
+            Kind::Pillow => 0.9,
+            Kind::Watermelon | Kind::Kiwi | Kind::Projectile => 0.62,
+            Kind::Sandcastle => 0.52,
+            Kind::Pumpkin => 0.42,
+            Kind::Pineapple => 0.4,
+            Kind::Knife => 0.25,
+            Kind::Dragonfruit => 0.3,
+            Kind::Table => 0.12,
+        }
+    }
+}
+
+/// An asset of a given size.
+#[derive(Clone, Copy, Debug)]
+pub struct Asset {
+    pub kind: Kind,
+    /// Half extents of the bounding box.
+    pub half: DVec3,
+}
+
+impl Asset {
+    pub fn new(kind: Kind, size: [f32; 3]) -> Asset {
+        Asset {
+            kind,
+            half: DVec3::new(size[0].into(), size[1].into(), size[2].into()) * 0.5,
+        }
+    }
+
+    /// Label id and colour of the region at `p` (object coordinates), `None` outside.
+    pub fn sample(&self, p: [f64; 3]) -> Option<(u16, Rgb)> {
+        let p = DVec3::from_array(p);
+        if !(p.abs().cmple(self.half).all()) {
+            return None;
+        }
+        let h = self.half;
+        match self.kind {
+            Kind::Watermelon => watermelon(p, h),
+            Kind::Jelly => jelly(p, h),
+            Kind::Pumpkin => pumpkin(p, h),
+            Kind::Kiwi => kiwi(p, h),
+            Kind::Pineapple => pineapple(p, h),
+            Kind::Dragonfruit => dragonfruit(p, h),
+            Kind::Toast => toast(p, h),
+            Kind::Sandcastle => sandcastle(p, h),
+            Kind::Pillow => pillow(p, h),
+            Kind::Cloth => cloth(p, h),
+            Kind::Table => table(p, h),
+            Kind::Knife => knife(p, h),
+            Kind::Projectile => projectile(p, h),
+        }
+    }
+
+    /// Whether `p` is in the solid.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        self.sample(p).is_some()
+    }
+
+    /// Approximate depth below the surface of a point inside: the shortest escape along 26
+    /// directions (axes, face and space diagonals), marched in steps of 1/64 of the
+    /// smallest half extent and refined by bisection. 0 outside.
+    pub fn depth(&self, p: [f64; 3]) -> f64 {
+        let p = DVec3::from_array(p);
+        if !self.contains(p.to_array()) {
+            return 0.0;
+        }
+        let step = self.half.min_element() / 64.0;
+        let reach = 2.0 * self.half.max_element();
+        let mut best = reach;
+        for d in directions() {
+            let mut t = step;
+            while t < best {
+                if !self.contains((p + d * t).to_array()) {
+                    // Bisect between the last inside point and this outside one.
+                    let (mut lo, mut hi) = (t - step, t);
+                    for _ in 0..8 {
+                        let mid = 0.5 * (lo + hi);
+                        if self.contains((p + d * mid).to_array()) {
+                            lo = mid;
+                        } else {
+                            hi = mid;
+                        }
+                    }
+                    best = best.min(hi);
+                    break;
+                }
+                t += step;
+            }
+        }
+        best
+    }
+}
+
+/// The 26 unit directions to the neighbours of a cube cell.
+fn directions() -> impl Iterator<Item = DVec3> {
+    (0..27).filter(|&i| i != 13).map(|i| {
+        DVec3::new(
+            (i % 3) as f64 - 1.0,
+            ((i / 3) % 3) as f64 - 1.0,
+            (i / 9) as f64 - 1.0,
+        )
+        .normalize()
+    })
+}
+
+// ---------------------------------------------------------------------------------------
+// Helpers: hashing, noise, colour mixing.
+
+/// A hash of integer lattice coordinates and a salt, uniform in [0, 1).
+fn hash(i: [i64; 3], salt: u64) -> f64 {
+    let mut x = salt.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    for c in i {
+        x ^= (c as u64).wrapping_add(0x632B_E59B_D9B4_E019);
+        x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        x ^= x >> 31;
+    }
+    x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^= x >> 29;
+    (x >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Three hashes of a cell (a point in the unit cube).
+fn hash3(i: [i64; 3], salt: u64) -> DVec3 {
+    DVec3::new(hash(i, salt), hash(i, salt + 1), hash(i, salt + 2))
+}
+
+fn cell(p: DVec3, c: f64) -> [i64; 3] {
+    let q = (p / c).floor();
+    [q.x as i64, q.y as i64, q.z as i64]
+}
+
+/// Smooth value noise in [0, 1] with features of size `c`.
+fn noise(p: DVec3, c: f64, salt: u64) -> f64 {
+    let q = p / c;
+    let b = q.floor();
+    let f = q - b;
+    let s = f * f * (DVec3::splat(3.0) - 2.0 * f);
+    let mut acc = 0.0;
+    for k in 0..8 {
+        let o = [(k & 1) as i64, ((k >> 1) & 1) as i64, ((k >> 2) & 1) as i64];
+        let w = (if o[0] == 1 { s.x } else { 1.0 - s.x })
+            * (if o[1] == 1 { s.y } else { 1.0 - s.y })
+            * (if o[2] == 1 { s.z } else { 1.0 - s.z });
+        acc += w * hash(
+            [b.x as i64 + o[0], b.y as i64 + o[1], b.z as i64 + o[2]],
+            salt,
+        );
+    }
+    acc
+}
+
+/// Per-point speckle in [−1, 1] on a fine grid `c` (grain of sand, fuzz of a skin).
+fn speckle(p: DVec3, c: f64, salt: u64) -> f64 {
+    2.0 * hash(cell(p, c), salt) - 1.0
+}
+
+fn mix(a: Rgb, b: Rgb, t: f64) -> Rgb {
+    let t = t.clamp(0.0, 1.0) as f32;
+    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
+}
+
+fn shade(c: Rgb, f: f64) -> Rgb {
+    c.map(|v| (v * f as f32).clamp(0.0, 1.0))
+}
+
+fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Seeds scattered on a hashed grid: each cell (side `c`) holds, with probability `keep`,
+/// one seed centred anywhere in it. Returns the first seed centre among the 27 cells
+/// around `p` for which `hit` holds (so seeds up to `c` in size are found whole, and any
+/// cut through the solid shows them, not only cuts between cell walls).
+fn scattered(p: DVec3, c: f64, keep: f64, salt: u64, hit: impl Fn(DVec3) -> bool) -> Option<DVec3> {
+    let i0 = cell(p, c);
+    for k in 0..27 {
+        let i = [
+            i0[0] + k % 3 - 1,
+            i0[1] + (k / 3) % 3 - 1,
+            i0[2] + k / 9 - 1,
+        ];
+        if hash(i, salt) >= keep {
+            continue;
+        }
+        let lo = DVec3::new(i[0] as f64, i[1] as f64, i[2] as f64) * c;
+        let s = lo + c * hash3(i, salt + 7);
+        if hit(s) {
+            return Some(s);
+        }
+    }
+    None
+}
+
+/// Whether `v` (relative to a seed's centre) lies in a teardrop of half length `l` and
+/// largest radius `w` along the unit `axis` (blunt end towards +axis).
+fn teardrop(v: DVec3, axis: DVec3, l: f64, w: f64) -> bool {
+    let u = v.dot(axis);
+    if u.abs() > l {
+        return false;
+    }
+    let rho = (v - u * axis).length();
+    let t = 0.5 * (u / l + 1.0);
+    rho <= w * (1.0 - (u / l).powi(2)).sqrt() * (0.45 + 0.55 * t)
+}
+
+/// Radial distance below an ellipsoid's surface of a point with normalised radius `r`
+/// (the point `p` = r · surface point).
+fn radial_depth(p: DVec3, r: f64, half: DVec3) -> f64 {
+    if r < 1e-9 {
+        half.min_element()
+    } else {
+        (1.0 - r) * p.length() / r
+    }
+}
+
+/// Signed distance to a box of half extents `b` with edges rounded by `rc`.
+fn rounded_box(p: DVec3, b: DVec3, rc: f64) -> f64 {
+    let q = p.abs() - (b - DVec3::splat(rc));
+    q.max(DVec3::ZERO).length() + q.max_element().min(0.0) - rc
+}
+
+// ---------------------------------------------------------------------------------------
+// The assets. `h` is the half extent of the bounding box; colours are display RGB.
+
+/// Ellipsoid, long axis x: dark green rind with wavy meridian stripes, a pale inner rind,
+/// red flesh, black teardrop seeds in a band halfway to the centre.
+fn watermelon(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let r = (p / h).length();
+    if r > 1.0 {
+        return None;
+    }
+    let radius = h.y.min(h.z);
+    let depth = radial_depth(p, r, h);
+    if depth < 0.07 * radius {
+        let q = p / h;
+        let around = q.z.atan2(q.y);
+        let wave = 0.35 * (7.0 * q.x).sin() + 0.15 * (17.0 * q.x + 2.0 * around).sin();
+        let stripe = smoothstep(-0.1, 0.35, (9.0 * around + wave * 3.0).sin());
+        let light = [0.48, 0.68, 0.26];
+        let dark = [0.07, 0.27, 0.07];
+        let c = mix(light, dark, stripe);
+        return Some((0, shade(c, 1.0 + 0.08 * speckle(p, 0.02 * radius, 1))));
+    }
+    if depth < 0.12 * radius {
+        return Some((
+            1,
+            mix(
+                [0.93, 0.96, 0.78],
+                [0.75, 0.9, 0.55],
+                smoothstep(0.07, 0.1, depth / radius),
+            ),
+        ));
+    }
+    // Seeds: teardrops pointing at the centre, in the band 0.45 < r < 0.72.
+    let c = 0.15 * radius;
+    let seed = |s: DVec3| {
+        (0.45..0.72).contains(&(s / h).length())
+            && teardrop(p - s, s.normalize(), 0.38 * c, 0.17 * c)
+    };
+    if scattered(p, c, 0.9, 11, seed).is_some() {
+        return Some((3, [0.05, 0.04, 0.03]));
+    }
+    let flesh = mix(
+        [0.93, 0.2, 0.22],
+        [0.98, 0.35, 0.33],
+        noise(p, 0.15 * radius, 3),
+    );
+    Some((2, flesh))
+}
+
+/// Rounded cube in one bright colour, a little deeper in tone inside.
+fn jelly(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let rc = 0.22 * h.min_element();
+    let d = rounded_box(p, h, rc);
+    if d > 0.0 {
+        return None;
+    }
+    let t = (-d / (0.5 * h.min_element())).min(1.0);
+    Some((0, mix([0.35, 0.95, 0.4], [0.1, 0.65, 0.2], t)))
+}
+
+/// The pumpkin's ribbed, dimpled body in normalised coordinates (`q` scaled by the body's
+/// half extents); `inset` shrinks it uniformly (0 = the surface).
+fn pumpkin_body(q: DVec3, inset: f64) -> bool {
+    let q = q / (1.0 - inset);
+    let phi = q.y.atan2(q.x);
+    let groove = (5.0 * phi).cos().abs().powi(6);
+    let lobe = 1.0 - 0.09 * groove;
+    let rxy = (q.x * q.x + q.y * q.y).sqrt();
+    let e2 = 1.0 - (rxy / lobe).powi(2);
+    if e2 < 0.0 {
+        return false;
+    }
+    let e = e2.sqrt();
+    let dimple = (-(rxy / 0.3).powi(2)).exp();
+    q.z <= e - 0.25 * dimple && q.z >= -(e - 0.12 * dimple)
+}
+
+/// Oblate and ribbed by 10 lobes: orange skin darker in the grooves, pale flesh, a hollow
+/// cavity with flat seeds along its wall, a green-brown stem in the top dimple.
+fn pumpkin(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    // The body fills z ∈ [−hz, hz − 0.3 hz]; the stem rises above it to hz.
+    let bh = 0.85 * h.z;
+    let centre = DVec3::new(0.0, 0.0, -h.z + bh);
+    let scale = DVec3::new(h.x, h.y, bh);
+    let q = (p - centre) / scale;
+    let stem_r = 0.07 * h.x.min(h.y);
+    let stem_base = centre.z + 0.55 * bh;
+    if p.z > stem_base {
+        // The stem leans a little towards +x as it rises.
+        let t = (p.z - stem_base) / (h.z - stem_base);
+        let axis_x = 0.6 * stem_r * t * t;
+        let rho = ((p.x - axis_x).powi(2) + p.y * p.y).sqrt();
+        let ridge = 1.0 + 0.12 * (6.0 * p.y.atan2(p.x - axis_x)).cos();
+        if rho <= stem_r * ridge * (1.0 - 0.25 * t) && !pumpkin_body(q, 0.0) {
+            let c = mix([0.38, 0.42, 0.16], [0.5, 0.42, 0.25], t);
+            return Some((3, shade(c, 0.85 + 0.15 * ridge)));
+        }
+    }
+    if !pumpkin_body(q, 0.0) {
+        return None;
+    }
+    if !pumpkin_body(q, 0.07) {
+        let phi = q.y.atan2(q.x);
+        let groove = (5.0 * phi).cos().abs().powi(3);
+        let c = mix([0.96, 0.52, 0.1], [0.62, 0.25, 0.04], groove);
+        let c = shade(c, 0.92 + 0.08 * q.z + 0.05 * speckle(p, 0.01 * h.x, 5));
+        return Some((0, c));
+    }
+    if pumpkin_body(q, 0.45) {
+        // The cavity: empty but for seeds hanging from its wall.
+        // Flat oval seeds (normal along the cell's hashed axis) near the cavity wall.
+        let c = 0.12 * h.x.min(h.y);
+        let seed = |s: DVec3| {
+            let axis = (hash3(cell(s, c), 23) - DVec3::splat(0.5)).normalize_or(DVec3::Z);
+            let v = p - s;
+            let u = v.dot(axis);
+            let rho2 = (v - u * axis).length_squared();
+            !pumpkin_body((s - centre) / scale, 0.55)
+                && (u / (0.1 * c)).powi(2) + rho2 / (0.3 * c).powi(2) <= 1.0
+        };
+        return scattered(p, c, 0.7, 21, seed).map(|_| (2, [0.96, 0.9, 0.68]));
+    }
+    Some((
+        1,
+        mix(
+            [1.0, 0.78, 0.38],
+            [0.99, 0.72, 0.32],
+            noise(p, 0.04 * h.x, 6),
+        ),
+    ))
+}
+
+/// Ellipsoid, long axis x: fuzzy brown skin, green flesh with pale rays, a cream core and a
+/// ring of black seeds around it.
+fn kiwi(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let q = p / h;
+    let r = q.length();
+    if r > 1.0 {
+        return None;
+    }
+    if r > 0.94 {
+        let c = shade(
+            [0.5, 0.36, 0.2],
+            1.0 + 0.18 * speckle(p, 0.004 * h.x.max(h.y), 7),
+        );
+        return Some((0, c));
+    }
+    let rho = (q.y * q.y + q.z * q.z).sqrt();
+    let around = q.z.atan2(q.y);
+    if (q.x / 0.85).powi(2) + (rho / 0.2).powi(2) <= 1.0 {
+        return Some((2, [0.96, 0.94, 0.8]));
+    }
+    // Seeds: one per (angle, length) cell of a ring at ρ ≈ 0.34, elongated radially.
+    let n = 30.0;
+    let a = around / std::f64::consts::TAU * n;
+    let (ia, ix) = (a.floor(), (q.x / 0.06).floor());
+    let salt_cell = [ia as i64, ix as i64, 0];
+    if hash(salt_cell, 31) < 0.85 && q.x.abs() < 0.8 {
+        let jit = hash3(salt_cell, 32);
+        let ac = ia + 0.3 + 0.4 * jit.x;
+        let xc = (ix + 0.3 + 0.4 * jit.y) * 0.06;
+        let rc = 0.3 + 0.08 * jit.z;
+        let d_rho = (rho - rc) / 0.07;
+        let d_arc = (a - ac) / n * std::f64::consts::TAU * rc / 0.025;
+        let d_x = (q.x - xc) / 0.04;
+        if d_rho * d_rho + d_arc * d_arc + d_x * d_x <= 1.0 {
+            return Some((3, [0.04, 0.03, 0.02]));
+        }
+    }
+    let rays = smoothstep(0.6, 1.0, (around * 40.0 + 3.0 * rho).sin()) * (1.0 - rho);
+    let c = mix(
+        [0.42, 0.7, 0.12],
+        [0.78, 0.88, 0.45],
+        0.4 * rays + 0.4 * (1.0 - rho / 0.9),
+    );
+    Some((1, c))
+}
+
+/// Geometry shared by the pineapple's body tests: normalised height, radius and the
+/// diamond cell coordinates of its eyes.
+struct PineBody {
+    qz: f64,
+    rho: f64,
+    /// Distance from the nearest eye centre in the diamond lattice, in [0, 1].
+    eye: f64,
+}
+
+impl PineBody {
+    fn new(p: DVec3, h: DVec3, centre_z: f64, bh: f64) -> PineBody {
+        let qz = (p.z - centre_z) / bh;
+        let rho = (p.x * p.x / (h.x * h.x) + p.y * p.y / (h.y * h.y)).sqrt();
+        let turns = p.y.atan2(p.x) / std::f64::consts::TAU * 8.0;
+        let (u, v) = (turns + qz * 5.0, turns - qz * 5.0);
+        let eye = 2.0 * ((u.fract() - 0.5).abs().max((v.fract() - 0.5).abs()));
+        let eye = eye.clamp(0.0, 1.0);
+        PineBody { qz, rho, eye }
+    }
+
+    /// The barrel's radius at this height, with the eyes bulging out.
+    fn radius(&self) -> f64 {
+        let barrel = (1.0 - self.qz.abs().powf(2.5)).max(0.0).powf(0.45);
+        0.95 * barrel * (1.0 + 0.04 * (1.0 - self.eye))
+    }
+}
+
+/// A barrel with a diamond pattern of eyes, pale yellow flesh, a fibrous core and a crown
+/// of long green leaves.
+fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let crown_h = 0.4 * 2.0 * h.z;
+    let bh = (2.0 * h.z - crown_h) / 2.0;
+    let centre_z = -h.z + bh;
+    let b = PineBody::new(p, h, centre_z, bh);
+    let radius = b.radius();
+    if b.qz.abs() <= 1.0 && b.rho <= radius {
+        if b.rho > radius - 0.08 {
+            let c = if b.eye < 0.35 {
+                mix([0.3, 0.18, 0.06], [0.55, 0.35, 0.1], b.eye / 0.35)
+            } else if b.eye < 0.8 {
+                [0.85, 0.6, 0.2]
+            } else {
+                [0.5, 0.5, 0.16]
+            };
+            return Some((0, shade(c, 1.0 + 0.06 * speckle(p, 0.003, 41))));
+        }
+        if b.rho < 0.2 {
+            let fibre = 0.5 + 0.5 * (p.y.atan2(p.x) * 14.0).sin();
+            return Some((2, mix([0.97, 0.93, 0.7], [0.9, 0.85, 0.55], fibre)));
+        }
+        return Some((1, mix([1.0, 0.9, 0.45], [0.98, 0.82, 0.3], b.rho)));
+    }
+    crown_leaf(p, h, centre_z + 0.9 * bh)
+}
+
+/// The pineapple's crown: 14 straight, tapering, keeled leaves from the top of the body,
+/// steeper in the middle.
+fn crown_leaf(p: DVec3, h: DVec3, base_z: f64) -> Option<(u16, Rgb)> {
+    let base = DVec3::new(0.0, 0.0, base_z);
+    let n = 14;
+    for i in 0..n {
+        let f = i as f64 / (n - 1) as f64;
+        let phi = 2.399_963 * i as f64;
+        let tilt = 0.15 + 0.85 * f;
+        let d = DVec3::new(tilt.sin() * phi.cos(), tilt.sin() * phi.sin(), tilt.cos());
+        // Long enough to reach the box top (inner leaves) or its side (outer ones).
+        let len = ((h.z - base_z) / d.z.max(1e-3)).min(0.95 * h.x.min(h.y) / tilt.sin().max(1e-3));
+        let rel = p - base;
+        let t = rel.dot(d) / len;
+        if !(0.0..=1.0).contains(&t) {
+            continue;
+        }
+        let side = DVec3::new(-phi.sin(), phi.cos(), 0.0);
+        let normal = d.cross(side);
+        let lat = rel.dot(side);
+        let width = 0.16 * h.x * (1.0 - t).powf(0.8) * (0.5 + 2.0 * t).min(1.0);
+        let keel = rel.dot(normal) - 0.35 * lat.abs();
+        if lat.abs() <= width && keel.abs() <= 0.05 * h.x {
+            let c = mix([0.16, 0.42, 0.14], [0.45, 0.62, 0.28], t);
+            return Some((3, shade(c, 1.0 - 0.25 * (lat.abs() / width.max(1e-9)))));
+        }
+    }
+    None
+}
+
+/// Ovoid magenta body with flame-like bracts (pink, green at the tips) in a spiral, white
+/// flesh with small black seeds.
+fn dragonfruit(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let bh = DVec3::new(0.74 * h.x, 0.74 * h.y, 0.8 * h.z);
+    let centre = DVec3::new(0.0, 0.0, -0.2 * h.z);
+    let q = (p - centre) / bh;
+    let r = q.length();
+    if r <= 1.0 {
+        if r > 0.93 {
+            let c = shade([0.9, 0.12, 0.45], 1.0 + 0.06 * speckle(p, 0.004, 51));
+            return Some((0, c));
+        }
+        let c = 0.07 * bh.x;
+        let seed = |s: DVec3| (p - s).length() <= 0.18 * c && ((s - centre) / bh).length() < 0.88;
+        if scattered(p, c, 0.6, 53, seed).is_some() {
+            return Some((3, [0.03, 0.03, 0.03]));
+        }
+        return Some((2, [0.97, 0.96, 0.93]));
+    }
+    bract(p, h, centre, bh)
+}
+
+/// One of the dragonfruit's bracts: a flat tongue leaving the surface upwards and
+/// outwards, magenta at the base, green at the tip.
+fn bract(p: DVec3, h: DVec3, centre: DVec3, bh: DVec3) -> Option<(u16, Rgb)> {
+    let n = 22;
+    for i in 0..n {
+        let f = (i as f64 + 0.5) / n as f64;
+        let phi = 2.399_963 * i as f64;
+        // Base on the surface at height qz, from low on the body to near the top.
+        let qz = -0.75 + 1.55 * f;
+        let ring = (1.0 - qz * qz).sqrt();
+        let out = DVec3::new(ring * phi.cos(), ring * phi.sin(), qz);
+        let base = centre + out * bh * 0.96;
+        let normal = (out / bh).normalize();
+        let up = (DVec3::Z - normal * normal.z).normalize_or(DVec3::X);
+        let d = (up * 0.75 + normal * 0.66).normalize();
+        let len = 0.5 * bh.x;
+        let rel = p - base;
+        let t = rel.dot(d) / len;
+        if !(0.0..=1.0).contains(&t) {
+            continue;
+        }
+        let side = d.cross(normal).normalize();
+        let flat = d.cross(side);
+        let width = 0.28 * len * (1.0 - t).powf(0.7);
+        if rel.dot(side).abs() <= width && rel.dot(flat).abs() <= 0.07 * bh.x {
+            let c = mix(
+                [0.92, 0.16, 0.5],
+                [0.5, 0.72, 0.2],
+                smoothstep(0.45, 0.9, t),
+            );
+            return Some((1, c));
+        }
+    }
+    let _ = h;
+    None
+}
+
+/// Whether (a, b) (normalised in the slice's plane) is inside the bread slice outline,
+/// shrunk by `ia`, `ib`: a rounded rectangle below and a wider dome on top.
+fn slice_outline(a: f64, b: f64, ia: f64, ib: f64) -> bool {
+    let rect = DVec3::new(a, b + 0.35, 0.0);
+    let in_rect = rounded_box(rect, DVec3::new(0.86 - ia, 0.65 - ib, 1.0), 0.12) <= 0.0;
+    let dome = (a / (1.0 - ia)).powi(2) + ((b - 0.3) / (0.7 - ib)).powi(2) <= 1.0;
+    in_rect || dome
+}
+
+/// A slice of bread lying flat (thickness along z): brown crust around the outline, light
+/// crumb with pores on the faces and inside.
+fn toast(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let (a, b) = (p.x / h.x, p.y / h.y);
+    if !slice_outline(a, b, 0.0, 0.0) {
+        return None;
+    }
+    let crust = 0.06 * h.x.min(h.y);
+    if !slice_outline(a, b, crust / h.x, crust / h.y) {
+        let c = shade([0.62, 0.36, 0.13], 1.0 + 0.1 * speckle(p, 0.002, 61));
+        return Some((0, c));
+    }
+    // Pores: holes, with a darker rim.
+    let c = 0.07 * h.x.min(h.y);
+    let pore = |s: DVec3| (p - s).length() <= 0.4 * c;
+    if let Some(s) = scattered(p, c, 0.25, 63, pore) {
+        if (p - s).length() <= 0.28 * c {
+            return None;
+        }
+        return Some((1, [0.86, 0.74, 0.52]));
+    }
+    let c = mix(
+        [0.98, 0.92, 0.76],
+        [0.93, 0.83, 0.6],
+        noise(p, 0.02 * h.x, 65),
+    );
+    Some((1, c))
+}
+
+/// Whether `p` is in a crenellated cylinder tower (axis `at`, radius `r`, from z = `z0` to
+/// `z1`, 8 merlons around the top ring).
+fn tower(p: DVec3, at: [f64; 2], r: f64, z0: f64, z1: f64) -> bool {
+    let (dx, dy) = (p.x - at[0], p.y - at[1]);
+    let rho = (dx * dx + dy * dy).sqrt();
+    if rho > r || p.z < z0 || p.z > z1 {
+        return false;
+    }
+    let merlon_h = 0.18 * r;
+    if p.z < z1 - merlon_h {
+        return true;
+    }
+    rho > 0.65 * r && (8.0 * dy.atan2(dx)).cos() > 0.0
+}
+
+/// A square base with four crenellated corner towers, crenellated walls between them and
+/// a taller central keep; sand-coloured with grain, darker (wetter) at the bottom.
+fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let height = 2.0 * h.z;
+    let z = |f: f64| -h.z + f * height;
+    let base_top = z(0.28);
+    let taper = 1.0 - 0.08 * ((p.z + h.z) / (base_top + h.z)).clamp(0.0, 1.0);
+    let in_base = p.z <= base_top && p.x.abs() <= h.x * taper && p.y.abs() <= h.y * taper;
+    let m = h.x.min(h.y);
+    let corner = [0.7 * h.x, 0.7 * h.y];
+    let towers = [[1.0, 1.0], [-1.0, 1.0], [1.0, -1.0], [-1.0, -1.0]]
+        .iter()
+        .any(|s| {
+            tower(
+                p,
+                [s[0] * corner[0], s[1] * corner[1]],
+                0.24 * m,
+                base_top,
+                z(0.78),
+            )
+        });
+    let keep = tower(p, [0.0, 0.0], 0.28 * m, base_top, h.z);
+    // Walls along the four sides between the towers, notched on top.
+    let wall_top = z(0.6);
+    let notched = p.z < wall_top - 0.05 * height || (p.x + p.y).rem_euclid(0.12 * m) < 0.06 * m;
+    let on_side = (p.x.abs() - corner[0]).abs() <= 0.06 * m && p.y.abs() <= corner[1]
+        || (p.y.abs() - corner[1]).abs() <= 0.06 * m && p.x.abs() <= corner[0];
+    let wall = on_side && p.z > base_top && p.z <= wall_top && notched;
+    if !(in_base || towers || keep || wall) {
+        return None;
+    }
+    let grain = 1.0 + 0.09 * speckle(p, 0.003, 71) + 0.05 * (noise(p, 0.05 * m, 72) - 0.5);
+    let wet = smoothstep(0.12, 0.0, (p.z + h.z) / height);
+    let c = mix([0.88, 0.76, 0.53], [0.66, 0.53, 0.36], wet);
+    Some((0, shade(c, grain)))
+}
+
+/// A puffy cushion: thickness falls to a thin seam at the edge; fabric on the outside with
+/// a fine weave, white stuffing inside, darker piping along the seam.
+fn pillow(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let (a, b) = (p.x / h.x, p.y / h.y);
+    let puff = ((1.0 - a.powi(4)).max(0.0) * (1.0 - b.powi(4)).max(0.0)).sqrt();
+    let seam = 0.1;
+    let half_t = h.z * puff.max(seam);
+    if p.z.abs() > half_t {
+        return None;
+    }
+    if a.abs().max(b.abs()) > 0.95 {
+        return Some((2, [0.3, 0.35, 0.55]));
+    }
+    if half_t - p.z.abs() < 0.15 * h.z {
+        let weave = 0.04 * ((p.x * 700.0).sin() * (p.y * 700.0).sin()).signum();
+        let c = shade([0.7, 0.78, 0.92], 1.0 + weave - 0.1 * (1.0 - puff));
+        return Some((0, c));
+    }
+    Some((1, [0.97, 0.97, 0.95]))
+}
+
+/// A thin sheet (the whole box) in red-and-white gingham.
+fn cloth(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let period = 0.2 * h.x.max(h.y);
+    let sx = (p.x / period).rem_euclid(1.0) < 0.5;
+    let sy = (p.y / period).rem_euclid(1.0) < 0.5;
+    let c = match (sx, sy) {
+        (true, true) => [0.72, 0.1, 0.12],
+        (true, false) | (false, true) => [0.9, 0.55, 0.55],
+        (false, false) => [0.96, 0.94, 0.9],
+    };
+    Some((0, c))
+}
+
+/// A table: a top with rounded corners on four square legs; wood with grain along x on
+/// the top and along z on the legs.
+fn table(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let top_t = 0.1 * h.z;
+    let wood = [0.62, 0.4, 0.22];
+    if p.z >= h.z - 2.0 * top_t {
+        let centre = DVec3::new(0.0, 0.0, h.z - top_t);
+        let rc = 0.05 * h.x.min(h.y);
+        if rounded_box(p - centre, DVec3::new(h.x, h.y, top_t), rc.min(0.9 * top_t)) > 0.0 {
+            return None;
+        }
+        let grain = (p.y * 120.0 / h.y.max(0.1) + 3.0 * noise(p, 0.1 * h.x, 81)).sin();
+        return Some((0, shade(wood, 1.0 + 0.1 * grain)));
+    }
+    let leg = 0.07 * h.x.min(h.y);
+    let (lx, ly) = (h.x - 1.5 * leg, h.y - 1.5 * leg);
+    let in_leg = (p.x.abs() - lx).abs() <= leg && (p.y.abs() - ly).abs() <= leg;
+    if !in_leg {
+        return None;
+    }
+    let grain = (p.x * 500.0 + 2.0 * noise(p, 0.05 * h.z, 83)).sin();
+    Some((1, shade(wood, 0.9 + 0.08 * grain)))
+}
+
+/// A kitchen knife along x: a dark handle with two rivets, a thin steel blade whose edge
+/// curves up to the tip at the spine.
+fn knife(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let length = 2.0 * h.x;
+    let blade_start = -h.x + 0.38 * length;
+    if p.x < blade_start {
+        // Handle: an elliptic cross-section in y–z, hanging from the spine line.
+        let hh = 0.3 * h.z;
+        let zc = h.z - 1.2 * hh;
+        let u = (p.x - (-h.x)) / (blade_start + h.x);
+        let round = 1.0 - (2.0 * u - 1.0).powi(8);
+        if (p.y / h.y).powi(2) + ((p.z - zc) / hh).powi(2) > round {
+            return None;
+        }
+        let rivet = [0.3, 0.7].iter().any(|f| {
+            let x = -h.x + f * (blade_start + h.x);
+            ((p.x - x).powi(2) + (p.z - zc).powi(2)).sqrt() < 0.35 * hh
+        });
+        let c = if rivet {
+            [0.8, 0.8, 0.78]
+        } else {
+            [0.16, 0.1, 0.07]
+        };
+        return Some((1, c));
+    }
+    let t = (p.x - blade_start) / (h.x - blade_start);
+    let edge = -h.z + 2.0 * h.z * t.powi(4);
+    if p.z < edge || p.z > h.z {
+        return None;
+    }
+    // Thickest at the spine, thinning to the edge (a lattice layer at y = 0 always fits).
+    let f = (p.z - edge) / (h.z - edge).max(1e-12);
+    if p.y.abs() > 0.3 * h.y * (0.2 + 0.8 * f) {
+        return None;
+    }
+    let c = mix(
+        [0.93, 0.94, 0.96],
+        [0.7, 0.72, 0.76],
+        smoothstep(0.0, 0.3, f),
+    );
+    Some((0, c))
+}
+
+/// A ball (an ellipsoid for unequal sizes): red with a white band around its equator.
+fn projectile(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+    let q = p / h;
+    if q.length() > 1.0 {
+        return None;
+    }
+    let c = if q.z.abs() < 0.12 {
+        [0.95, 0.95, 0.92]
+    } else {
+        [0.85, 0.12, 0.08]
+    };
+    Some((0, c))
+}
