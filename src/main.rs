@@ -120,7 +120,7 @@ struct SuiteArgs {
     /// Coarsen each example scene by this factor (dx and spacings × s: N / s³).
     #[arg(long, default_value_t = 1.0)]
     scale: f64,
-    /// Frames per example (frame 0 plus frames-1 timed frames); default 6, 3 with --quick.
+    /// Frames per example (frame 0 plus frames-1 timed frames); default 4, 3 with --quick.
     #[arg(long)]
     frames: Option<u32>,
     /// Image size of the end-to-end runs.
@@ -299,7 +299,7 @@ fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
         scale: args.scale,
         frames: args
             .frames
-            .unwrap_or(if args.quick { 3 } else { 6 })
+            .unwrap_or(if args.quick { 3 } else { 4 })
             .max(2),
         width: args.width,
         height: args.height,
@@ -600,7 +600,7 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         );
         renderer.set_lighting(&gpu, &l.setup)?;
     }
-    let sim = match &setup {
+    let mut sim = match &setup {
         Some(s) => {
             for w in &s.warnings {
                 log::warn!("{w}");
@@ -707,7 +707,7 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             }
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
-            if let Some((gpu_sim, derive, s)) = &sim {
+            if let Some((gpu_sim, derive, s)) = &mut sim {
                 if frame > sim_first {
                     // The moving colliders' clock: this frame's steps start at frame − 1.
                     let steps_before = f64::from(frame - 1) * f64::from(s.steps_per_frame);
@@ -715,6 +715,15 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                     gpu_sim.step(&gpu, s.steps_per_frame)?;
                 }
                 let w = gpu_sim.take_watchdog(&gpu)?;
+                if w.pool_overflow > 0 {
+                    bail!(
+                        "frame {frame}: {} block(s) of the sparse grid found its pool of {} blocks full (the active region grew more than twofold within a frame); rerun with more steps per frame or a smaller domain",
+                        w.pool_overflow,
+                        gpu_sim.pool_blocks()
+                    );
+                }
+                // Sparse grid: room for the active region to double before the next read.
+                gpu_sim.fit_pool(&gpu, &w)?;
                 if w.nonfinite > 0 || w.escaped > 0 {
                     bail!("{}", watchdog_message(frame, w, s));
                 }

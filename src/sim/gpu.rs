@@ -141,7 +141,8 @@ pub struct GpuStep {
     pub band: u32,
     pub apic: u32,
     pub num_kinematic: u32,
-    pub _pad: u32,
+    /// Blocks the grid pool holds (set by `GpuSim`).
+    pub pool_blocks: u32,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
     pub materials: [GpuMaterial; MAX_MATERIALS],
@@ -222,7 +223,7 @@ impl GpuStep {
             band: params.boundaries.walls.band,
             apic: u32::from(params.transfer == Transfer::Apic),
             num_kinematic: 0,
-            _pad: 0,
+            pool_blocks: 0,
             walls: params
                 .boundaries
                 .walls
@@ -255,6 +256,11 @@ pub struct Watchdog {
     pub escaped: u32,
     /// The first of those steps in which a particle was counted, 0-based from the last read.
     pub first_step: Option<u32>,
+    /// The most blocks of 4³ nodes active in one of those steps (the sparse grid's need).
+    pub active_blocks_max: u32,
+    /// Active blocks that found the grid pool full (their nodes were skipped: the steps are
+    /// wrong; grow the pool, [`GpuSim::fit_pool`]).
+    pub pool_overflow: u32,
 }
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
@@ -293,10 +299,15 @@ impl P2gPath {
 
 /// The atomic path's passes (built only on adapters with float atomics).
 struct AtomicPasses {
+    mark: Kernel,
     scatter: Kernel,
     grid: Kernel,
-    scatter_bind: wgpu::BindGroup,
-    grid_bind: wgpu::BindGroup,
+}
+
+struct AtomicBinds {
+    mark: wgpu::BindGroup,
+    scatter: wgpu::BindGroup,
+    grid: wgpu::BindGroup,
 }
 
 /// A step pass: its WGSL after the shared modules, entry point `main`.
@@ -330,8 +341,11 @@ struct Buffers {
     key_count: wgpu::Buffer,
     affine: wgpu::Buffer,
     ranges: wgpu::Buffer,
+    /// The sparse grid's pool: `pool_blocks` × 64 nodes × vec4 (common.wgsl, node_index).
     grid: wgpu::Buffer,
     block_flags: wgpu::Buffer,
+    /// Block → pool slot, one u32 per block of the domain.
+    block_slot: wgpu::Buffer,
     active_blocks: wgpu::Buffer,
     block_args: wgpu::Buffer,
     flags: wgpu::Buffer,
@@ -345,6 +359,167 @@ struct Binds {
     ranges: wgpu::BindGroup,
     p2g: wgpu::BindGroup,
     g2p: wgpu::BindGroup,
+    atomic: Option<AtomicBinds>,
+}
+
+/// The binding number of `block_slot` in `shaders/sim/step/common.wgsl`.
+const BLOCK_SLOT_BINDING: u32 = 15;
+
+/// Buffers at bindings 0, 1, 2, … and the block slot table at its own binding.
+fn with_slots<'a>(
+    list: &[&'a wgpu::Buffer],
+    slots: &'a wgpu::Buffer,
+) -> Vec<(u32, &'a wgpu::Buffer)> {
+    let mut out: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(list.iter().copied()).collect();
+    out.push((BLOCK_SLOT_BINDING, slots));
+    out
+}
+
+/// Bytes of a grid pool of `blocks` blocks (64 nodes of 16 bytes each).
+fn pool_bytes(blocks: u32) -> u64 {
+    u64::from(blocks) * 64 * 16
+}
+
+/// Blocks of 4³ nodes the particles' stencils reach now.
+fn blocks_reached(particles: &Particles, grid: &Grid) -> u32 {
+    let per_axis = grid.nodes().map(|n| n.div_ceil(BLOCK));
+    let mut seen = std::collections::HashSet::new();
+    for x in &particles.x {
+        let Some(st) = grid.stencil(*x) else {
+            continue;
+        };
+        let base = st.base.as_uvec3();
+        let (lo, hi) = (base / BLOCK, (base + 2) / BLOCK);
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    seen.insert(x + per_axis.x * (y + per_axis.y * z));
+                }
+            }
+        }
+    }
+    seen.len() as u32
+}
+
+/// First pool size: twice the blocks the particles reach at the start (at least 64), at
+/// most every block. [`GpuSim::fit_pool`] grows it between frames.
+fn initial_pool(particles: &Particles, grid: &Grid, blocks: u32) -> u32 {
+    (2 * blocks_reached(particles, grid)).max(64).min(blocks)
+}
+
+fn make_binds(
+    device: &wgpu::Device,
+    kernels: &Kernels,
+    atomic: Option<&AtomicPasses>,
+    b: &Buffers,
+    n: u32,
+    sort_bits: u32,
+) -> Binds {
+    let sort = kernels.sort.plan(
+        device,
+        &kernels.scan,
+        &SortBuffers {
+            count: &b.key_count,
+            keys: &b.keys,
+            values: &b.values,
+            keys_alt: &b.keys_alt,
+            values_alt: &b.values_alt,
+        },
+        n.max(1),
+        sort_bits,
+    );
+    let (sorted_keys, sorted_values) = if sort.result_in_alternates() {
+        (&b.keys_alt, &b.values_alt)
+    } else {
+        (&b.keys, &b.values)
+    };
+    let slots = &b.block_slot;
+    let atomic = atomic.map(|a| AtomicBinds {
+        mark: a.mark.bind(device, &[&b.step, &b.x_mass, &b.block_flags]),
+        scatter: a.scatter.bind_at(
+            device,
+            &with_slots(
+                &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &b.grid],
+                slots,
+            ),
+        ),
+        grid: a.grid.bind_at(
+            device,
+            &with_slots(&[&b.step, &b.grid, &b.active_blocks, &b.block_args], slots),
+        ),
+    });
+    Binds {
+        prepare: kernels.prepare.bind(
+            device,
+            &[
+                &b.step,
+                &b.x_mass,
+                &b.v_volume,
+                &b.deformation,
+                &b.affine_velocity,
+                &b.material,
+                &b.keys,
+                &b.values,
+                &b.affine,
+            ],
+        ),
+        ranges: kernels
+            .ranges
+            .kernel
+            .bind(device, &[&b.key_count, sorted_keys, &b.ranges]),
+        mark_blocks: kernels
+            .mark_blocks
+            .bind(device, &[&b.step, sorted_keys, &b.block_flags]),
+        compact_blocks: kernels.compact_blocks.bind_at(
+            device,
+            &with_slots(
+                &[
+                    &b.step,
+                    &b.block_flags,
+                    &b.active_blocks,
+                    &b.block_args,
+                    &b.flags,
+                ],
+                slots,
+            ),
+        ),
+        p2g: kernels.p2g.bind_at(
+            device,
+            &with_slots(
+                &[
+                    &b.step,
+                    &b.ranges,
+                    sorted_values,
+                    &b.x_mass,
+                    &b.v_volume,
+                    &b.affine,
+                    &b.grid,
+                    &b.active_blocks,
+                    &b.block_args,
+                ],
+                slots,
+            ),
+        ),
+        g2p: kernels.g2p.bind_at(
+            device,
+            &with_slots(
+                &[
+                    &b.step,
+                    &b.x_mass,
+                    &b.v_volume,
+                    &b.deformation,
+                    &b.affine_velocity,
+                    &b.alpha,
+                    &b.material,
+                    &b.grid,
+                    &b.flags,
+                ],
+                slots,
+            ),
+        ),
+        sort,
+        atomic,
+    }
 }
 
 /// One pass of the step, for recording and per-pass timing.
@@ -352,6 +527,7 @@ struct Binds {
 enum StepPass {
     Clear,
     Prepare,
+    MarkParticles,
     Scatter,
     GridFromSums,
     Sort,
@@ -367,6 +543,7 @@ impl StepPass {
         match self {
             StepPass::Clear => "clear",
             StepPass::Prepare => "prepare",
+            StepPass::MarkParticles => "mark blocks (particles)",
             StepPass::Scatter => "p2g scatter",
             StepPass::GridFromSums => "grid from sums",
             StepPass::Sort => "sort",
@@ -388,6 +565,7 @@ pub struct GpuSim {
     binds: Binds,
     num_particles: u32,
     num_blocks: u32,
+    sort_bits: u32,
     /// The step constants as uploaded (moving colliders are added by `set_kinematic`).
     consts: GpuStep,
     kinematic: Vec<KinematicCollider>,
@@ -519,8 +697,10 @@ impl GpuSim {
         let c: Vec<[[f32; 4]; 3]> = particles.c.iter().map(|m| mat3_to_gpu(*m)).collect();
         let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
         let base_cells = (grid.cells - 1).element_product();
-        let nodes = grid.nodes().element_product();
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
+        let pool = initial_pool(particles, grid, blocks);
+        let mut step = step;
+        step.pool_blocks = pool;
         let nn = u64::from(n);
         let buffers = Buffers {
             step: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -541,9 +721,10 @@ impl GpuSim {
             key_count: init(gpu, "sim key count", &[n], false),
             affine: zeroed(gpu, "sim affine", nn * 48),
             ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
-            grid: zeroed(gpu, "sim grid", u64::from(nodes) * 16),
+            grid: zeroed(gpu, "sim grid pool", pool_bytes(pool)),
             block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
-            active_blocks: zeroed(gpu, "sim active blocks", u64::from(blocks) * 4),
+            block_slot: zeroed(gpu, "sim block slots", u64::from(blocks) * 4),
+            active_blocks: zeroed(gpu, "sim active blocks", u64::from(pool) * 4),
             block_args: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("sim block dispatch"),
                 size: 16,
@@ -553,118 +734,27 @@ impl GpuSim {
                     | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
-            flags: zeroed(gpu, "sim watchdog flags", 16),
+            flags: zeroed(gpu, "sim watchdog flags", 32),
         };
-        let b = &buffers;
-        let sort = kernels.sort.plan(
-            device,
-            &kernels.scan,
-            &SortBuffers {
-                count: &b.key_count,
-                keys: &b.keys,
-                values: &b.values,
-                keys_alt: &b.keys_alt,
-                values_alt: &b.values_alt,
-            },
-            n.max(1),
-            32 - base_cells.leading_zeros(),
-        );
-        let (sorted_keys, sorted_values) = if sort.result_in_alternates() {
-            (&b.keys_alt, &b.values_alt)
-        } else {
-            (&b.keys, &b.values)
-        };
-        let binds = Binds {
-            prepare: kernels.prepare.bind(
+        let atomic = (path == P2gPath::Atomic).then(|| AtomicPasses {
+            mark: step_kernel(
                 device,
-                &[
-                    &b.step,
-                    &b.x_mass,
-                    &b.v_volume,
-                    &b.deformation,
-                    &b.affine_velocity,
-                    &b.material,
-                    &b.keys,
-                    &b.values,
-                    &b.affine,
-                ],
+                "sim mark_particles",
+                include_str!("../../shaders/sim/step/mark_particles.wgsl"),
             ),
-            ranges: kernels
-                .ranges
-                .kernel
-                .bind(device, &[&b.key_count, sorted_keys, &b.ranges]),
-            mark_blocks: kernels
-                .mark_blocks
-                .bind(device, &[&b.step, sorted_keys, &b.block_flags]),
-            compact_blocks: kernels.compact_blocks.bind(
-                device,
-                &[
-                    &b.step,
-                    &b.block_flags,
-                    &b.active_blocks,
-                    &b.block_args,
-                    &b.flags,
-                ],
-            ),
-            p2g: kernels.p2g.bind(
-                device,
-                &[
-                    &b.step,
-                    &b.ranges,
-                    sorted_values,
-                    &b.x_mass,
-                    &b.v_volume,
-                    &b.affine,
-                    &b.grid,
-                    &b.active_blocks,
-                    &b.block_args,
-                ],
-            ),
-            g2p: kernels.g2p.bind(
-                device,
-                &[
-                    &b.step,
-                    &b.x_mass,
-                    &b.v_volume,
-                    &b.deformation,
-                    &b.affine_velocity,
-                    &b.alpha,
-                    &b.material,
-                    &b.grid,
-                    &b.flags,
-                ],
-            ),
-            sort,
-        };
-        let atomic = (path == P2gPath::Atomic).then(|| {
-            let b = &buffers;
-            let scatter = step_kernel(
+            scatter: step_kernel(
                 device,
                 "sim p2g_scatter",
                 include_str!("../../shaders/sim/step/p2g_scatter.wgsl"),
-            );
-            let grid = step_kernel(
+            ),
+            grid: step_kernel(
                 device,
                 "sim grid_from_sums",
                 include_str!("../../shaders/sim/step/grid_from_sums.wgsl"),
-            );
-            AtomicPasses {
-                scatter_bind: scatter.bind(
-                    device,
-                    &[
-                        &b.step,
-                        &b.x_mass,
-                        &b.v_volume,
-                        &b.affine,
-                        &b.grid,
-                        &b.block_flags,
-                    ],
-                ),
-                grid_bind: grid.bind(device, &[&b.step, &b.grid, &b.active_blocks, &b.block_args]),
-                scatter,
-                grid,
-            }
+            ),
         });
+        let sort_bits = 32 - base_cells.leading_zeros();
+        let binds = make_binds(device, &kernels, atomic.as_ref(), &buffers, n, sort_bits);
         Ok(GpuSim {
             path,
             atomic,
@@ -673,6 +763,7 @@ impl GpuSim {
             binds,
             num_particles: n,
             num_blocks: blocks,
+            sort_bits,
             consts: step,
             kinematic: Vec::new(),
             dt: params.dt,
@@ -786,7 +877,7 @@ impl GpuSim {
         }
         list.push(Prepare);
         match &self.atomic {
-            Some(_) => list.extend([Scatter, CompactBlocks, GridFromSums]),
+            Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
             None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
         }
         list.push(G2p);
@@ -813,14 +904,17 @@ impl GpuSim {
             match pass {
                 StepPass::Clear => {}
                 StepPass::Prepare => k.prepare.dispatch(&mut c, &bind.prepare, particle_groups),
+                StepPass::MarkParticles => {
+                    let (a, ab) = self.atomic_passes();
+                    a.mark.dispatch(&mut c, &ab.mark, particle_groups);
+                }
                 StepPass::Scatter => {
-                    let a = self.atomic.as_ref().expect("atomic path");
-                    a.scatter.dispatch(&mut c, &a.scatter_bind, particle_groups);
+                    let (a, ab) = self.atomic_passes();
+                    a.scatter.dispatch(&mut c, &ab.scatter, particle_groups);
                 }
                 StepPass::GridFromSums => {
-                    let a = self.atomic.as_ref().expect("atomic path");
-                    a.grid
-                        .dispatch_indirect(&mut c, &a.grid_bind, &b.block_args, 0);
+                    let (a, ab) = self.atomic_passes();
+                    a.grid.dispatch_indirect(&mut c, &ab.grid, &b.block_args, 0);
                 }
                 StepPass::Sort => k.sort.record(&mut c, &k.scan, &bind.sort),
                 StepPass::Ranges => k
@@ -869,6 +963,54 @@ impl GpuSim {
             .collect())
     }
 
+    fn atomic_passes(&self) -> (&AtomicPasses, &AtomicBinds) {
+        match (&self.atomic, &self.binds.atomic) {
+            (Some(a), Some(b)) => (a, b),
+            _ => unreachable!("atomic pass recorded on the gather path"),
+        }
+    }
+
+    /// Blocks of 4³ nodes the grid pool holds (the sparse grid's capacity).
+    pub fn pool_blocks(&self) -> u32 {
+        self.consts.pool_blocks
+    }
+
+    /// Bytes of the grid itself: the pool and the block → slot table.
+    pub fn grid_bytes(&self) -> u64 {
+        self.buffers.grid.size() + self.buffers.block_slot.size()
+    }
+
+    /// Resize the grid pool to `blocks` blocks (at most every block of the domain). Results
+    /// do not depend on the size as long as no step overflows it.
+    pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
+        let blocks = blocks.clamp(1, self.num_blocks);
+        self.consts.pool_blocks = blocks;
+        self.buffers.grid = zeroed(gpu, "sim grid pool", pool_bytes(blocks));
+        self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
+        gpu.queue
+            .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
+        self.binds = make_binds(
+            &gpu.device,
+            &self.kernels,
+            self.atomic.as_ref(),
+            &self.buffers,
+            self.num_particles,
+            self.sort_bits,
+        );
+        gpu.check()
+    }
+
+    /// Between frames: grow the pool to twice the most active blocks the watchdog saw when
+    /// that came above 3/4 of the capacity (or overflowed it). Returns whether it grew.
+    pub fn fit_pool(&mut self, gpu: &GpuContext, w: &Watchdog) -> Result<bool, GpuError> {
+        let cap = self.consts.pool_blocks;
+        if cap >= self.num_blocks || u64::from(w.active_blocks_max) * 4 <= u64::from(cap) * 3 {
+            return Ok(false);
+        }
+        self.set_pool_blocks(gpu, w.active_blocks_max.saturating_mul(2))?;
+        Ok(true)
+    }
+
     /// The P2G path in use.
     pub fn path(&self) -> P2gPath {
         self.path
@@ -907,6 +1049,7 @@ impl GpuSim {
             &b.ranges,
             &b.grid,
             &b.block_flags,
+            &b.block_slot,
             &b.active_blocks,
             &b.block_args,
         ]
@@ -920,21 +1063,23 @@ impl GpuSim {
     pub fn take_watchdog(&self, gpu: &GpuContext) -> Result<Watchdog, GpuError> {
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sim watchdog readback"),
-            size: 16,
+            size: 32,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&self.buffers.flags, 0, &staging, 0, Some(16));
+        enc.copy_buffer_to_buffer(&self.buffers.flags, 0, &staging, 0, Some(32));
         enc.clear_buffer(&self.buffers.flags, 0, None);
         gpu.queue.submit([enc.finish()]);
         let bytes = read_buffer(gpu, &staging)?;
-        let v: [u32; 4] = bytemuck::pod_read_unaligned(&bytes[..16]);
+        let v: [u32; 8] = bytemuck::pod_read_unaligned(&bytes[..32]);
         Ok(Watchdog {
             nonfinite: v[0],
             escaped: v[1],
             // g2p.wgsl stores the bitwise NOT of the step so that atomicMax keeps the first.
             first_step: (v[2] != 0).then_some(!v[2]),
+            active_blocks_max: v[4],
+            pool_overflow: v[5],
         })
     }
 
@@ -953,7 +1098,8 @@ impl GpuSim {
         enc.copy_buffer_to_buffer(&b.active_blocks, 0, &staging, 16, None);
         gpu.queue.submit([enc.finish()]);
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(gpu, &staging)?);
-        let count = words[3] as usize;
+        // Blocks beyond the pool's capacity were counted but not listed.
+        let count = (words[3] as usize).min(words.len() - 4);
         let mut list = words[4..4 + count].to_vec();
         list.sort_unstable();
         Ok(list)
@@ -1036,6 +1182,7 @@ mod tests {
                 band,
                 apic,
                 num_kinematic,
+                pool_blocks,
                 walls,
                 colliders,
                 materials,

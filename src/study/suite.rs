@@ -67,7 +67,7 @@ const fn ex(
 }
 
 /// Our own simulated demo scenes, timed after the paper's examples.
-pub const EXTRA_SCENES: [&str; 1] = ["fracture"];
+pub const EXTRA_SCENES: [&str; 3] = ["fracture", "pillow", "table"];
 
 /// Options of `bench suite`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -128,6 +128,10 @@ pub struct SuiteReport {
     pub command: String,
     pub adapter: String,
     pub cores: usize,
+    /// /proc/loadavg (1, 5, 15 min) when the suite started: timings on a shared machine
+    /// mean little without it.
+    #[serde(default)]
+    pub load_average: Option<[f64; 3]>,
     pub commit: String,
     pub options_quick: bool,
     pub options_scale: f64,
@@ -153,6 +157,7 @@ pub fn run_suite(
     log: &mut dyn Write,
 ) -> Result<SuiteReport> {
     writeln!(log, "adapter: {}", gpu.describe())?;
+    let load_average = load_average();
     let sim = sim_cases(gpu, opts, log)?;
     let render = render_cases(gpu, opts, log)?;
     let mut end_to_end = Vec::new();
@@ -167,6 +172,7 @@ pub fn run_suite(
         command: std::env::args().collect::<Vec<_>>().join(" "),
         adapter: gpu.describe(),
         cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        load_average,
         commit: git_commit(),
         options_quick: opts.quick,
         options_scale: opts.scale,
@@ -388,6 +394,16 @@ pub fn prepare_scene(value: &mut serde_json::Value, scale: f64, base: &Path) {
     }
 }
 
+fn load_average() -> Option<[f64; 3]> {
+    let text = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let v: Vec<f64> = text
+        .split_whitespace()
+        .take(3)
+        .filter_map(|x| x.parse().ok())
+        .collect();
+    (v.len() == 3).then(|| [v[0], v[1], v[2]])
+}
+
 fn git_commit() -> String {
     std::process::Command::new("git")
         .args(["rev-parse", "--short", "HEAD"])
@@ -403,8 +419,11 @@ fn git_commit() -> String {
 /// fixed format (`tests` check the table against the JSON).
 pub fn markdown(r: &SuiteReport) -> String {
     let mut s = String::new();
+    let load = r.load_average.map_or("unknown".into(), |l| {
+        format!("{:.2} {:.2} {:.2}", l[0], l[1], l[2])
+    });
     s += &format!(
-        "Adapter: {}; {} CPU cores; commit `{}`; command `{}`.\n\n",
+        "Adapter: {}; {} CPU cores (load average at the start {load}); commit `{}`; command `{}`.\n\n",
         r.adapter, r.cores, r.commit, r.command
     );
     s += "| example | paper s/frame | paper N | status | particles | steps/frame | sim s/frame | render s/frame | s/frame |\n";
@@ -482,6 +501,7 @@ mod tests {
             command: "splatter bench suite".into(),
             adapter: "test".into(),
             cores: 2,
+            load_average: Some([1.0, 2.0, 3.0]),
             commit: "abc".into(),
             options_quick: true,
             options_scale: 1.0,

@@ -84,7 +84,8 @@ struct SimStep {
     band: u32,
     apic: u32,
     num_kinematic: u32,
-    _pad1: u32,
+    // blocks the grid pool holds (sparse grid: common.wgsl, node_index)
+    pool_blocks: u32,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
     colliders: array<Collider, MAX_COLLIDERS>,
@@ -172,10 +173,36 @@ fn block_node(block: u32, lid: u32) -> BlockNode {
     let nb = blocks_per_axis();
     let b = vec3<u32>(block % nb.x, (block / nb.x) % nb.y, block / (nb.x * nb.y));
     let node = b * BLOCK + vec3<u32>(lid % BLOCK, (lid / BLOCK) % BLOCK, lid / (BLOCK * BLOCK));
-    let n = step.nodes;
     var out: BlockNode;
-    out.ok = all(node < n);
+    out.ok = all(node < step.nodes);
     out.node = node;
-    out.index = node.x + n.x * (node.y + n.y * node.z);
+    out.index = node_index(node);
     return out;
+}
+
+// Sparse grid. The grid's nodes live in a pool of `step.pool_blocks` blocks of 4³ nodes
+// (one vec4 each); `block_slot` maps every block of the domain to its pool slot for the
+// current step (NO_SLOT: not active). compact_blocks.wgsl assigns the slots each step, so
+// grid memory follows the active region, not the domain. Node i's storage is always found
+// through node_index. Declared here at a binding number no pass uses for anything else;
+// passes that address nodes bind it (GpuSim).
+const NO_SLOT: u32 = 0xffffffffu;
+const BLOCK_NODES: u32 = 64u;
+
+@group(0) @binding(15) var<storage, read_write> block_slot: array<u32>;
+
+// Index into the grid pool of node i (on the grid, in an active block); NO_SLOT when its
+// block has no slot this step (a pool overflow, reported by the watchdog).
+fn node_index(i: vec3<u32>) -> u32 {
+    let slot = block_slot[block_index(i / BLOCK)];
+    if slot == NO_SLOT {
+        return NO_SLOT;
+    }
+    let l = i % BLOCK;
+    return slot * BLOCK_NODES + l.x + BLOCK * (l.y + BLOCK * l.z);
+}
+
+// The number of listed active blocks: those that got a pool slot.
+fn listed_blocks(count: u32) -> u32 {
+    return min(count, step.pool_blocks);
 }

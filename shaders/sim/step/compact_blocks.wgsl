@@ -1,5 +1,6 @@
-// Active blocks (per block): list the flagged blocks and reset their flags for the next
-// step. The list's length goes into indirect dispatch arguments for the node passes, split
+// Active blocks (per block): list the flagged blocks, give each a slot of the grid pool
+// (block_slot, common.wgsl; NO_SLOT for the others) and reset the flags for the next step.
+// Blocks beyond the pool's capacity get no slot and are counted as overflow. The list's length goes into indirect dispatch arguments for the node passes, split
 // as x = min(count, 65535), y = ⌈count / 65535⌉ (the portable per-dimension limit); node
 // passes bounds-check their slot against the count.
 
@@ -10,8 +11,9 @@
 @group(0) @binding(3) var<storage, read_write> block_args: array<atomic<u32>, 4>;
 
 // The watchdog's counters (g2p.wgsl); [3] counts the steps since the last read: this pass
-// runs once per step, so it keeps the clock.
-@group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>, 4>;
+// runs once per step, so it keeps the clock; [4] the most active blocks in a step, [5]
+// blocks left without a pool slot (overflow), both since the last read.
+@group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>, 8>;
 
 const MAX_GROUPS_X: u32 = 65535u;
 
@@ -23,11 +25,22 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         atomicAdd(&flags[3], 1u);
     }
     let nb = blocks_per_axis();
-    if b >= nb.x * nb.y * nb.z || block_flags[b] == 0u {
+    if b >= nb.x * nb.y * nb.z {
+        return;
+    }
+    if block_flags[b] == 0u {
+        block_slot[b] = NO_SLOT;
         return;
     }
     block_flags[b] = 0u;
     let slot = atomicAdd(&block_args[3], 1u);
+    atomicMax(&flags[4], slot + 1u);
+    if slot >= step.pool_blocks {
+        block_slot[b] = NO_SLOT;
+        atomicAdd(&flags[5], 1u);
+        return;
+    }
+    block_slot[b] = slot;
     active_blocks[slot] = b;
     atomicMax(&block_args[0], min(slot + 1u, MAX_GROUPS_X));
     atomicMax(&block_args[1], slot / MAX_GROUPS_X + 1u);

@@ -43,14 +43,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     let s = st.s;
-    let n = step.nodes;
     let base = vec3<u32>(s.base);
     var vp = vec3<f32>(0.0);
     var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
         let i = base + off;
-        let vi = grid[i.x + n.x * (i.y + n.y * i.z)].xyz;
+        let vi = grid[node_index(i)].xyz;
         let w = bspline_weight(s, off);
         let d = bspline_offset(s, off, step.dx);
         vp += w * vi;

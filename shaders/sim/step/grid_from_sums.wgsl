@@ -12,7 +12,7 @@
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let slot = wid.x + wid.y * nwg.x;
-    if slot >= block_args[3] {
+    if slot >= listed_blocks(block_args[3]) {
         return;
     }
     let bn = block_node(active_blocks[slot], lid);

@@ -7,11 +7,10 @@
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> affine: array<mat3x3<f32>>;
-// The grid, 4 floats per node: momentum x, y, z, mass; cleared before every step and turned
-// into velocities in place by grid_from_sums.wgsl
+// The grid pool (common.wgsl, node_index), 4 floats per node: momentum x, y, z, mass;
+// cleared before every step and turned into velocities in place by grid_from_sums.wgsl.
+// The blocks were flagged and given slots before (mark_particles.wgsl, compact_blocks.wgsl).
 @group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<f32>>;
-// The blocks this particle's stencil reaches are flagged here (common.wgsl, active blocks).
-@group(0) @binding(5) var<storage, read_write> block_flags: array<u32>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -26,24 +25,17 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     let s = st.s;
-    let n = step.nodes;
     let base = vec3<u32>(s.base);
-    let lo = stencil_block_lo(base);
-    let hi = stencil_block_hi(base);
-    for (var z = lo.z; z <= hi.z; z++) {
-        for (var y = lo.y; y <= hi.y; y++) {
-            for (var x = lo.x; x <= hi.x; x++) {
-                // Every writer stores the same value, so the order does not matter.
-                block_flags[block_index(vec3<u32>(x, y, z))] = 1u;
-            }
-        }
-    }
     let mv = xm.w * v_volume[p].xyz;
     let a = affine[p];
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
         let i = base + off;
-        let idx = 4u * (i.x + n.x * (i.y + n.y * i.z));
+        let node = node_index(i);
+        if node == NO_SLOT {
+            continue;
+        }
+        let idx = 4u * node;
         let w = bspline_weight(s, off);
         let mom = w * (mv + a * bspline_offset(s, off, step.dx));
         atomicAdd(&grid_sum[idx], mom.x);
