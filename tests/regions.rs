@@ -175,7 +175,7 @@ fn bad_regions_are_named() {
         ),
         (
             r#"{ "label": "flesh", "material": M }"#,
-            r#"objects[0].physics.regions[0].label = "flesh": expected a label of the object's Gaussians (this object has no labels)"#,
+            r#"objects[0].physics.regions[0].label = "flesh": expected one of the object's labels: core"#,
         ),
         (
             r#"{ "shell": { "to": 0.1 }, "material": M, "color": [2, 0, 0] }"#,
@@ -214,7 +214,7 @@ fn bad_regions_are_named() {
 /// the count.
 #[test]
 fn too_many_materials_over_the_scene_are_refused() {
-    let regions = vec![r#"{ "shell": { "to": 0.01 }, "material": M }"#; 8]
+    let regions = [r#"{ "shell": { "to": 0.01 }, "material": M }"#; 8]
         .join(", ")
         .replace('M', &material(1000.0));
     let obj = |x: f64| {
@@ -232,6 +232,50 @@ fn too_many_materials_over_the_scene_are_refused() {
         .to_string();
     assert!(
         err.contains("objects[1].physics.regions = 18 materials in the scene: expected at most 16"),
+        "{err}"
+    );
+}
+
+/// A label region: the basic shapes label their shells (`shell0`, …, `core`); a region on
+/// `shell0` takes exactly the Gaussians so labelled, fill particles follow the label of
+/// their nearest Gaussian, and an unknown label lists the object's labels.
+#[test]
+fn label_regions_follow_the_gaussians_labels() {
+    let obj = |label: &str| {
+        format!(
+            r#"{{ "procedural": {{ "shape": "sphere", "radius": 0.15, "spacing": 0.02, "color": [1, 1, 1],
+                                 "shells": [{{ "depth": 0.04, "color": [0, 1, 0] }}] }},
+                "transform": {{ "translate": [0.5, 0.5, 0.5] }},
+                "physics": {{ "material": {m}, "fill": true,
+                              "regions": [{{ "label": "{label}", "material": {stiff} }}] }} }}"#,
+            m = material(1000.0),
+            stiff = material(5000.0)
+        )
+    };
+    let s = setup(&scene_text(&obj("shell0"), 0.02, "")).unwrap();
+    let (mut labelled, mut stiff) = (0, 0);
+    for part in &s.parts {
+        for (k, label) in s.part_labels(part).enumerate() {
+            let p = part.start + k - s.static_count;
+            let in_region = label == Some("shell0");
+            assert_eq!(
+                s.particles.material[p] == 1,
+                in_region,
+                "{:?} {label:?}",
+                part.kind
+            );
+            labelled += usize::from(in_region);
+            stiff += usize::from(s.particles.material[p] == 1);
+        }
+    }
+    println!("shell0: {labelled} particles, {stiff} stiff");
+    assert!(labelled > 1000 && labelled == stiff);
+    let err = setup(&scene_text(&obj("rind"), 0.02, ""))
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains(r#"objects[0].physics.regions[0].label = "rind": expected one of the object's labels: shell0, core"#),
         "{err}"
     );
 }

@@ -635,7 +635,7 @@ pub fn prepare(
         let regions = ObjectRegions::build(o, i, &physics.regions, &object_labels(&part))?;
         for (m, rho) in &regions.materials {
             dt_cfl = dt_cfl.min(cfl_dt(m, *rho, dx, spec.cfl));
-            materials.push(m.clone());
+            materials.push(*m);
         }
         if materials.len() > crate::sim::gpu::MAX_MATERIALS {
             return Err(SceneError::invalid(
