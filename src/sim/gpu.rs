@@ -13,9 +13,15 @@
 //!    walls);
 //! 6. `shaders/sim/step/g2p.wgsl` — velocities, C, F, positions, NACC plasticity.
 //!
-//! Where the adapter has float atomics, steps 2–5 are instead `p2g_scatter.wgsl` (each
-//! particle adds to its 27 nodes and flags their blocks), `compact_blocks.wgsl` and
-//! `grid_from_sums.wgsl` (the grid update on the active blocks).
+//! Where the adapter has float atomics, steps 2–5 are instead `mark_particles.wgsl` (each
+//! particle flags the blocks of its stencil), `compact_blocks.wgsl`, `p2g_scatter.wgsl`
+//! (each particle adds to its 27 nodes) and `grid_from_sums.wgsl` (the grid update on the
+//! active blocks).
+//!
+//! The grid is sparse: a pool of blocks of 4³ nodes with a block → slot table that
+//! `compact_blocks.wgsl` fills each step (`node_index` in `common.wgsl` is the only way to a
+//! node). The pool holds twice the blocks active at the start and grows between frames
+//! ([`GpuSim::fit_pool`]) from the high-water mark the watchdog reads back.
 //!
 //! Every substep of a call to [`GpuSim::step`] goes into one command buffer with nothing
 //! read back in between. The per-particle math is `shaders/sim/*.wgsl`, tested against the
