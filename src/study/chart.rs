@@ -61,7 +61,8 @@ fn log_bounds(series: &[Series]) -> ((f64, f64), (f64, f64)) {
     if x0 > x1 {
         return ((0.1, 1.0), (0.1, 1.0));
     }
-    ((x0 / 1.5, x1 * 1.5), (y0 / 2.0, y1 * 2.0))
+    // Headroom above the data for a legend in an upper corner.
+    ((x0 / 1.5, x1 * 1.5), (y0 / 2.0, y1 * 20.0))
 }
 
 fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
