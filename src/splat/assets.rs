@@ -528,8 +528,9 @@ impl PineBody {
         let rho = (p.x * p.x / (h.x * h.x) + p.y * p.y / (h.y * h.y)).sqrt();
         let turns = p.y.atan2(p.x) / std::f64::consts::TAU * 8.0;
         let (u, v) = (turns + qz * 5.0, turns - qz * 5.0);
-        let eye = 2.0 * ((u.fract() - 0.5).abs().max((v.fract() - 0.5).abs()));
-        let eye = eye.clamp(0.0, 1.0);
+        // rem_euclid, not fract: fract keeps the sign, which breaks the pattern at u < 0.
+        let (du, dv) = (u.rem_euclid(1.0) - 0.5, v.rem_euclid(1.0) - 0.5);
+        let eye = (2.0 * du.abs().max(dv.abs())).clamp(0.0, 1.0);
         PineBody { qz, rho, eye }
     }
 
@@ -543,19 +544,19 @@ impl PineBody {
 /// A barrel with a diamond pattern of eyes, pale yellow flesh, a fibrous core and a crown
 /// of long green leaves.
 fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
-    let crown_h = 0.4 * 2.0 * h.z;
+    let crown_h = 0.36 * 2.0 * h.z;
     let bh = (2.0 * h.z - crown_h) / 2.0;
     let centre_z = -h.z + bh;
     let b = PineBody::new(p, h, centre_z, bh);
     let radius = b.radius();
     if b.qz.abs() <= 1.0 && b.rho <= radius {
         if b.rho > radius - 0.08 {
-            let c = if b.eye < 0.35 {
-                mix([0.3, 0.18, 0.06], [0.55, 0.35, 0.1], b.eye / 0.35)
-            } else if b.eye < 0.8 {
-                [0.85, 0.6, 0.2]
+            let c = if b.eye < 0.3 {
+                mix([0.28, 0.16, 0.05], [0.6, 0.38, 0.1], b.eye / 0.3)
+            } else if b.eye < 0.86 {
+                [0.9, 0.62, 0.18]
             } else {
-                [0.5, 0.5, 0.16]
+                [0.45, 0.38, 0.1]
             };
             return Some((0, shade(c, 1.0 + 0.06 * speckle(p, 0.003, 41))));
         }
@@ -571,6 +572,10 @@ fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 /// The pineapple's crown: 14 straight, tapering, keeled leaves from the top of the body,
 /// steeper in the middle.
 fn crown_leaf(p: DVec3, h: DVec3, base_z: f64) -> Option<(u16, Rgb)> {
+    // Leaves rise from the base: nothing far below it (a keeled leaf dips ≤ 0.11 hx).
+    if p.z < base_z - 0.2 * h.x {
+        return None;
+    }
     let base = DVec3::new(0.0, 0.0, base_z);
     let n = 14;
     for i in 0..n {
@@ -715,7 +720,7 @@ fn tower(p: DVec3, at: [f64; 2], r: f64, z0: f64, z1: f64) -> bool {
 fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let height = 2.0 * h.z;
     let z = |f: f64| -h.z + f * height;
-    let base_top = z(0.28);
+    let base_top = z(0.18);
     let taper = 1.0 - 0.08 * ((p.z + h.z) / (base_top + h.z)).clamp(0.0, 1.0);
     let in_base = p.z <= base_top && p.x.abs() <= h.x * taper && p.y.abs() <= h.y * taper;
     let m = h.x.min(h.y);
@@ -726,14 +731,14 @@ fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
             tower(
                 p,
                 [s[0] * corner[0], s[1] * corner[1]],
-                0.24 * m,
+                0.26 * m,
                 base_top,
-                z(0.78),
+                z(0.8),
             )
         });
     let keep = tower(p, [0.0, 0.0], 0.28 * m, base_top, h.z);
     // Walls along the four sides between the towers, notched on top.
-    let wall_top = z(0.6);
+    let wall_top = z(0.55);
     let notched = p.z < wall_top - 0.05 * height || (p.x + p.y).rem_euclid(0.12 * m) < 0.06 * m;
     let on_side = (p.x.abs() - corner[0]).abs() <= 0.06 * m && p.y.abs() <= corner[1]
         || (p.y.abs() - corner[1]).abs() <= 0.06 * m && p.x.abs() <= corner[0];
