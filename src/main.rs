@@ -279,6 +279,10 @@ fn run(cli: Cli) -> Result<()> {
                 },
         }) => {
             use splatter::study::Part;
+            if quick && !redraw && out == Path::new("docs") {
+                // The smoke sweeps would overwrite the documented numbers.
+                bail!("--quick runs smoke-sized sweeps: give an --out other than docs");
+            }
             let part = match only {
                 AccuracyPart::All => Part::All,
                 AccuracyPart::Convergence => Part::Convergence,
