@@ -400,3 +400,24 @@ fn color_repaints_the_first_region() {
         assert_eq!(is_blue, cloud.label_name(i) == Some("rind"), "Gaussian {i}");
     }
 }
+
+/// An asset's depth below its surface (used by `physics.regions` shells): on the ball,
+/// within 25 % above the exact r − |p| (26 escape directions) and never below it.
+#[test]
+fn asset_depth_approximates_the_distance_to_the_surface() {
+    let spec = asset_spec(Kind::Projectile, r#""size": [0.2, 0.2, 0.2], "#);
+    for i in 0..200 {
+        let f = |k: u32| ((i * 7919 + k * 104_729) % 1000) as f64 / 1000.0 - 0.5;
+        let p = DVec3::new(f(1), f(2), f(3)) * 0.2;
+        let exact = 0.1 - p.length();
+        let d = spec.depth(p.to_array());
+        if exact <= 0.0 {
+            assert_eq!(d, 0.0, "outside at {p}");
+        } else {
+            assert!(
+                d >= exact - 1e-5 && d <= 1.25 * exact + 1e-5,
+                "{d} vs {exact} at {p}"
+            );
+        }
+    }
+}

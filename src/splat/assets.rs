@@ -172,23 +172,26 @@ impl Asset {
     }
 
     /// Approximate depth below the surface of a point inside: the shortest escape along 26
-    /// directions (axes, face and space diagonals), marched in steps of 1/64 of the
-    /// smallest half extent and refined by bisection. 0 outside.
+    /// directions (axes, face and space diagonals), marched in steps of 1/16 of the
+    /// smallest half extent (thinner gaps may be stepped over) and refined by bisection to
+    /// 1/16 000 of it. 0 outside. About 100 µs a point: for shell regions, not per frame.
     pub fn depth(&self, p: [f64; 3]) -> f64 {
         let p = DVec3::from_array(p);
         if !self.contains(p.to_array()) {
             return 0.0;
         }
-        let step = self.half.min_element() / 64.0;
+        let step = self.half.min_element() / 16.0;
         let reach = 2.0 * self.half.max_element();
         let mut best = reach;
         for d in directions() {
-            let mut t = step;
+            // Sample up to the best escape so far (the last step is cut short at it).
+            let mut t = 0.0;
             while t < best {
-                if !self.contains((p + d * t).to_array()) {
+                let next = (t + step).min(best);
+                if !self.contains((p + d * next).to_array()) {
                     // Bisect between the last inside point and this outside one.
-                    let (mut lo, mut hi) = (t - step, t);
-                    for _ in 0..8 {
+                    let (mut lo, mut hi) = (t, next);
+                    for _ in 0..10 {
                         let mid = 0.5 * (lo + hi);
                         if self.contains((p + d * mid).to_array()) {
                             lo = mid;
@@ -196,10 +199,10 @@ impl Asset {
                             hi = mid;
                         }
                     }
-                    best = best.min(hi);
+                    best = hi;
                     break;
                 }
-                t += step;
+                t = next;
             }
         }
         best
