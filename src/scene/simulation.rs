@@ -653,11 +653,6 @@ pub fn prepare(
             None => None,
             Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
         };
-
-        let filled = match physics.fill.as_ref().and_then(|f| f.spacing(dx)) {
-            None => None,
-            Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
-        };
         let mut fill_splats = filled
             .as_ref()
             .map(|f| paint_asset_fill(obj, fill_gaussians(&part, f)))
