@@ -301,10 +301,7 @@ fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
     let opts = splatter::study::suite::SuiteOptions {
         quick: args.quick,
         scale: args.scale,
-        frames: args
-            .frames
-            .unwrap_or(if args.quick { 3 } else { 4 })
-            .max(2),
+        frames: args.frames.unwrap_or(if args.quick { 3 } else { 4 }).max(2),
         width: args.width,
         height: args.height,
         sim_steps: 20,
@@ -712,20 +709,11 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
             if let Some((gpu_sim, derive, s)) = &mut sim {
-                if frame > sim_first {
-                    // The moving colliders' clock: this frame's steps start at frame − 1.
-                    let steps_before = f64::from(frame - 1) * f64::from(s.steps_per_frame);
-                    gpu_sim.set_time(steps_before * s.params.dt);
-                    gpu_sim.step(&gpu, s.steps_per_frame)?;
-                }
-                let w = gpu_sim.take_watchdog(&gpu)?;
-                if w.pool_overflow > 0 {
-                    bail!(
-                        "frame {frame}: {} block(s) of the sparse grid found its pool of {} blocks full (the active region grew more than twofold within a frame); rerun with more steps per frame or a smaller domain",
-                        w.pool_overflow,
-                        gpu_sim.pool_blocks()
-                    );
-                }
+                let w = if frame > sim_first {
+                    simulate_frame(&gpu, gpu_sim, frame, s)?
+                } else {
+                    gpu_sim.take_watchdog(&gpu)?
+                };
                 // Sparse grid: room for the active region to double before the next read.
                 gpu_sim.fit_pool(&gpu, &w)?;
                 if w.nonfinite > 0 || w.escaped > 0 {
@@ -958,6 +946,45 @@ fn report_done(
         workers,
         started.elapsed().as_secs_f64()
     );
+}
+
+/// One frame's substeps. While the sparse grid's pool can overflow, the particle state is
+/// copied aside first (on the GPU); when the steps did overflow it — the moving region grew
+/// more than the pool's headroom within the frame — the frame is run again from that copy
+/// with a larger pool, so results never depend on the pool's size.
+fn simulate_frame(
+    gpu: &GpuContext,
+    gpu_sim: &mut GpuSim,
+    frame: u32,
+    s: &SimulationSetup,
+) -> Result<Watchdog> {
+    // The moving colliders' clock: this frame's steps start at frame − 1.
+    let start = f64::from(frame - 1) * f64::from(s.steps_per_frame) * s.params.dt;
+    loop {
+        let retry = gpu_sim.pool_can_overflow();
+        if retry {
+            gpu_sim.save_state(gpu)?;
+        }
+        gpu_sim.set_time(start);
+        gpu_sim.step(gpu, s.steps_per_frame)?;
+        let w = gpu_sim.take_watchdog(gpu)?;
+        if w.pool_overflow == 0 {
+            return Ok(w);
+        }
+        if !retry {
+            bail!(
+                "frame {frame}: {} block(s) overflowed a sparse-grid pool that holds every block of the domain (an internal error; please report it)",
+                w.pool_overflow
+            );
+        }
+        log::info!(
+            "frame {frame}: the sparse grid's pool of {} blocks overflowed by {}; growing it and running the frame again",
+            gpu_sim.pool_blocks(),
+            w.pool_overflow
+        );
+        gpu_sim.restore_state(gpu)?;
+        gpu_sim.grow_pool_after_overflow(gpu, &w)?;
+    }
 }
 
 /// `--from-states DIR`: each frame's Gaussians from DIR/frame_NNNNN.ply, rendered with the

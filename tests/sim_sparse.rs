@@ -117,3 +117,38 @@ fn an_overflowing_pool_is_reported_and_grown() {
     assert_eq!(w2.pool_overflow, 0, "{w2:?}");
     assert!(!sim.fit_pool(&gpu, &w2).unwrap());
 }
+
+/// Steps that overflow the pool are re-run from a saved state with a grown pool (what
+/// `splatter render` does per frame): the result equals a run that never overflowed, bit
+/// for bit on the gather path.
+#[test]
+fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
+    let (p, grid, materials, params) = fruit();
+    let gpu = GpuContext::new(None).unwrap();
+    let steps = 6;
+    let clean = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
+    clean.step(&gpu, steps).unwrap();
+    assert_eq!(clean.take_watchdog(&gpu).unwrap().pool_overflow, 0);
+    let want = clean.read_particles(&gpu, &p).unwrap();
+
+    let mut sim = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
+    sim.set_pool_blocks(&gpu, 4).unwrap();
+    let mut reruns = 0;
+    loop {
+        assert!(sim.pool_can_overflow());
+        sim.save_state(&gpu).unwrap();
+        sim.step(&gpu, steps).unwrap();
+        let w = sim.take_watchdog(&gpu).unwrap();
+        if w.pool_overflow == 0 {
+            break;
+        }
+        sim.restore_state(&gpu).unwrap();
+        sim.grow_pool_after_overflow(&gpu, &w).unwrap();
+        reruns += 1;
+        assert!(reruns < 10, "the pool keeps overflowing");
+    }
+    let got = sim.read_particles(&gpu, &p).unwrap();
+    eprintln!("{reruns} rerun(s), pool {} blocks", sim.pool_blocks());
+    assert!(reruns > 0, "test setup: the small pool must overflow");
+    assert!(got.x == want.x && got.v == want.v && got.f == want.f);
+}

@@ -578,6 +578,9 @@ pub struct GpuSim {
     dt: f64,
     /// Start time of the next substep, in seconds (the moving colliders' clock).
     time: std::cell::Cell<f64>,
+    /// A copy of the particle state ([`GpuSim::save_state`]), made only while the grid pool
+    /// can overflow.
+    saved: Option<Vec<wgpu::Buffer>>,
 }
 
 fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
@@ -774,6 +777,7 @@ impl GpuSim {
             kinematic: Vec::new(),
             dt: params.dt,
             time: std::cell::Cell::new(0.0),
+            saved: None,
         })
     }
 
@@ -1004,6 +1008,70 @@ impl GpuSim {
             self.sort_bits,
         );
         gpu.check()
+    }
+
+    /// Whether a step can overflow the grid pool (it holds fewer blocks than the domain).
+    pub fn pool_can_overflow(&self) -> bool {
+        self.consts.pool_blocks < self.num_blocks
+    }
+
+    /// The buffers that carry the particle state from step to step (x, v, F, C, α).
+    fn state(&self) -> [&wgpu::Buffer; 5] {
+        let b = &self.buffers;
+        [
+            &b.x_mass,
+            &b.v_volume,
+            &b.deformation,
+            &b.affine_velocity,
+            &b.alpha,
+        ]
+    }
+
+    /// Copy the particle state aside on the GPU (no readback), so that steps that overflow
+    /// the grid pool can be re-run from here with a larger pool ([`Self::restore_state`]).
+    pub fn save_state(&mut self, gpu: &GpuContext) -> Result<(), GpuError> {
+        if self.saved.is_none() {
+            let copies = self
+                .state()
+                .iter()
+                .map(|b| zeroed(gpu, "sim saved state", b.size()))
+                .collect();
+            self.saved = Some(copies);
+        }
+        let saved = self.saved.as_ref().expect("allocated above");
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        for (src, dst) in self.state().iter().zip(saved) {
+            enc.copy_buffer_to_buffer(src, 0, dst, 0, None);
+        }
+        gpu.queue.submit([enc.finish()]);
+        gpu.check()
+    }
+
+    /// Put back the state of the last [`Self::save_state`].
+    pub fn restore_state(&self, gpu: &GpuContext) -> Result<(), GpuError> {
+        let Some(saved) = &self.saved else {
+            return Ok(());
+        };
+        let mut enc = gpu.device.create_command_encoder(&Default::default());
+        for (src, dst) in saved.iter().zip(self.state()) {
+            enc.copy_buffer_to_buffer(src, 0, dst, 0, None);
+        }
+        gpu.queue.submit([enc.finish()]);
+        gpu.check()
+    }
+
+    /// After steps overflowed the pool: room for what overflowed, twice over (at most every
+    /// block of the domain, where no step can overflow).
+    pub fn grow_pool_after_overflow(
+        &mut self,
+        gpu: &GpuContext,
+        w: &Watchdog,
+    ) -> Result<(), GpuError> {
+        let need = self
+            .consts
+            .pool_blocks
+            .saturating_add(w.pool_overflow.max(1));
+        self.set_pool_blocks(gpu, need.saturating_mul(2))
     }
 
     /// Between frames: grow the pool to twice the most active blocks the watchdog saw when
