@@ -318,10 +318,13 @@ fn default_scene_parses_and_validates() {
     s.validate().unwrap();
     assert_eq!(
         (s.output.width, s.output.height, s.frame_count()),
-        (640, 360, 24)
+        (640, 360, 36)
     );
     assert_eq!(s.output_dir(), Path::new("out/default"));
     assert!(s.objects.len() >= 4);
+    // A dynamic scene under moving lights (issue 5): something breaks, something wobbles.
+    assert!(s.simulation.is_some() && s.lighting.is_some());
+    assert_eq!(s.objects.iter().filter(|o| o.physics.is_some()).count(), 2);
     let path = s.camera_path().unwrap();
     for f in 0..s.frame_count() {
         let c = path.camera(f);
@@ -341,12 +344,12 @@ fn default_scene_builds_a_modest_number_of_gaussians() {
     assert_eq!(splats.len(), report.total_gaussians());
     assert_eq!(report.objects.len(), s.objects.len());
     assert!(
-        (30_000..=200_000).contains(&splats.len()),
+        (10_000..=200_000).contains(&splats.len()),
         "{} Gaussians",
         splats.len()
     );
     assert!(report.warnings().is_empty());
-    assert_eq!(report.objects[1].name, "ball");
+    assert_eq!(report.objects[2].name, "watermelon");
 }
 
 #[test]
