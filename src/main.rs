@@ -983,7 +983,8 @@ fn simulate_frame(
             w.pool_overflow
         );
         gpu_sim.restore_state(gpu)?;
-        gpu_sim.grow_pool_after_overflow(gpu, &w)?;
+        // The watchdog counts every active block, also those left out: grow to twice that.
+        gpu_sim.fit_pool(gpu, &w)?;
     }
 }
 

@@ -143,7 +143,7 @@ fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
             break;
         }
         sim.restore_state(&gpu).unwrap();
-        sim.grow_pool_after_overflow(&gpu, &w).unwrap();
+        assert!(sim.fit_pool(&gpu, &w).unwrap());
         reruns += 1;
         assert!(reruns < 10, "the pool keeps overflowing");
     }

@@ -1060,20 +1060,6 @@ impl GpuSim {
         gpu.check()
     }
 
-    /// After steps overflowed the pool: room for what overflowed, twice over (at most every
-    /// block of the domain, where no step can overflow).
-    pub fn grow_pool_after_overflow(
-        &mut self,
-        gpu: &GpuContext,
-        w: &Watchdog,
-    ) -> Result<(), GpuError> {
-        let need = self
-            .consts
-            .pool_blocks
-            .saturating_add(w.pool_overflow.max(1));
-        self.set_pool_blocks(gpu, need.saturating_mul(2))
-    }
-
     /// Between frames: grow the pool to twice the most active blocks the watchdog saw when
     /// that came above 3/4 of the capacity (or overflowed it). Returns whether it grew.
     pub fn fit_pool(&mut self, gpu: &GpuContext, w: &Watchdog) -> Result<bool, GpuError> {
