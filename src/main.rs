@@ -1,5 +1,6 @@
 //! The `splatter` command line. Errors end as one `error: …` line and a non-zero exit.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -16,10 +17,12 @@ use splatter::output::{frame_path, FrameWriter, Progress};
 use splatter::relight::gpu_normals::GpuNormals;
 use splatter::render::GpuRenderer;
 use splatter::scene::kinematic::KinematicObject;
-use splatter::scene::simulation::SimulationSetup;
+use splatter::scene::simulation::{PartKind, SimulationSetup};
 use splatter::scene::{self, BuildReport, CameraPath, Scene};
+use splatter::sim::cpu::Material;
 use splatter::sim::derive::{Derive, RigidDerive};
 use splatter::sim::gpu::{GpuSim, P2gPath, Watchdog};
+use splatter::study::fragments::{fragment_sizes, FragmentSummary, PIECE_SHARE};
 
 #[derive(Parser)]
 #[command(
@@ -188,6 +191,11 @@ struct RenderArgs {
     /// the PATH; checked before rendering starts).
     #[arg(long, value_name = "FILE")]
     video: Option<PathBuf>,
+    /// Count the pieces each simulated object has broken into, every rendered frame:
+    /// particles closer than Δx are linked, linked particles form a fragment
+    /// (OUT_DIR/fragments.csv; the last frame's counts are printed).
+    #[arg(long, conflicts_with_all = ["ply", "from_states"])]
+    fragments: bool,
 }
 
 fn main() -> ExitCode {
@@ -317,6 +325,7 @@ impl RenderArgs {
     fn default_scene() -> RenderArgs {
         RenderArgs {
             export_ply: None,
+            fragments: false,
             scene: None,
             out: None,
             frames: None,
@@ -500,6 +509,13 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         }
     }
     let setup = scene::simulation::prepare(&scene, splats.clone(), &report)?;
+    if args.fragments && setup.is_none() {
+        let name = args
+            .scene
+            .as_ref()
+            .map_or("the default scene".into(), |p| p.display().to_string());
+        bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
+    }
     let hash = checkpoint::scene_hash(&scene, &splats, setup.as_ref());
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
@@ -690,6 +706,10 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let background = Vec3::from(scene.output.background);
     let fail_at = fail_hook_frame()?;
     let sim_first = resume_state.as_ref().map_or(0, |cp| cp.frame);
+    let mut fragment_log = match args.fragments {
+        true => Some(FragmentLog::create(&dir.join("fragments.csv"))?),
+        false => None,
+    };
     let mut run_frames = || -> Result<()> {
         let Some(_) = first_missing else {
             return Ok(());
@@ -745,6 +765,10 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
                     progress.frame_done();
                     continue;
                 }
+                if let Some(log) = &mut fragment_log {
+                    let state = gpu_sim.read_particles(&gpu, &s.particles)?;
+                    log.record(frame, &state, s, &scene)?;
+                }
                 derive.run(&gpu)?;
                 let seconds = f64::from(frame) / f64::from(scene.output.fps);
                 for (k, r) in &rigid {
@@ -797,7 +821,128 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
         scene.output.fps,
     )?;
     report_done(rendered, render_start, gpu_ms, workers, started);
+    if let Some(log) = &fragment_log {
+        log.print_last();
+    }
     Ok(())
+}
+
+/// A CSV field: quoted (with doubled quotes) when it holds a comma, quote or line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Vertical extent of a body (z from its 1st to its 99th percentile, so that a few
+/// thrown-off particles do not count): how far a slumping heap has sunk.
+fn height_extent(points: &[glam::DVec3]) -> f64 {
+    if points.is_empty() {
+        return 0.0;
+    }
+    let mut z: Vec<f64> = points.iter().map(|p| p.z).collect();
+    z.sort_unstable_by(f64::total_cmp);
+    let at = |q: f64| z[((z.len() - 1) as f64 * q).round() as usize];
+    at(0.99) - at(0.01)
+}
+
+/// `--fragments`: per rendered frame and simulated object, how many pieces its particles
+/// form (`splatter::study::fragments`), appended to a CSV as the frames go.
+struct FragmentLog {
+    file: std::io::BufWriter<std::fs::File>,
+    last: Vec<(String, u32, FragmentSummary)>,
+}
+
+impl FragmentLog {
+    fn create(path: &Path) -> Result<Self> {
+        let mut file = std::io::BufWriter::new(
+            std::fs::File::create(path)
+                .with_context(|| format!("--fragments: cannot create {}", path.display()))?,
+        );
+        writeln!(
+            file,
+            "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height"
+        )?;
+        Ok(Self {
+            file,
+            last: Vec::new(),
+        })
+    }
+
+    fn record(
+        &mut self,
+        frame: u32,
+        state: &splatter::sim::cpu::Particles,
+        s: &SimulationSetup,
+        scene: &scene::Scene,
+    ) -> Result<()> {
+        self.last.clear();
+        let mut objects: Vec<usize> = s
+            .parts
+            .iter()
+            .filter(|p| p.kind != PartKind::Static)
+            .map(|p| p.object)
+            .collect();
+        objects.dedup();
+        for object in objects {
+            let points: Vec<glam::DVec3> = s
+                .parts
+                .iter()
+                .filter(|p| p.object == object && p.kind != PartKind::Static)
+                .flat_map(|p| p.start - s.static_count..p.start - s.static_count + p.len)
+                .map(|i| state.x[i])
+                .collect();
+            let damaged = s
+                .parts
+                .iter()
+                .filter(|p| p.object == object && p.kind != PartKind::Static)
+                .flat_map(|p| p.start - s.static_count..p.start - s.static_count + p.len)
+                .filter(|&i| {
+                    matches!(
+                        s.materials[state.material[i] as usize],
+                        Material::Nacc { .. }
+                    ) && state.alpha[i] >= 0.0
+                })
+                .count();
+            let height = height_extent(&points);
+            let sizes = fragment_sizes(&points, s.grid.dx);
+            let summary = FragmentSummary::new(&sizes, PIECE_SHARE);
+            let name = scene.objects[object]
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("objects[{object}]"));
+            let name = csv_field(&name);
+            writeln!(
+                self.file,
+                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4}",
+                summary.particles,
+                summary.pieces,
+                summary.largest_share,
+                summary.debris,
+                summary.fragments,
+                damaged as f64 / summary.particles.max(1) as f64
+            )?;
+            self.last.push((name, frame, summary));
+        }
+        self.file.flush()?;
+        Ok(())
+    }
+
+    fn print_last(&self) {
+        for (name, frame, s) in &self.last {
+            eprintln!(
+                "fragments: {name} at frame {frame}: {} piece(s) with ≥ {:.0}% of its {} particles (largest {:.1}%), {} particles of debris, {} fragments in all",
+                s.pieces,
+                PIECE_SHARE * 100.0,
+                s.particles,
+                s.largest_share * 100.0,
+                s.debris,
+                s.fragments
+            );
+        }
+    }
 }
 
 /// A rigid derive pass for every run of a kinematic object's Gaussians (`scene::kinematic`).

@@ -396,6 +396,12 @@ fn render_scene_error(name: &str, scene: &str, extra: &[&str]) -> String {
 }
 
 #[test]
+fn fragments_of_a_scene_that_simulates_nothing() {
+    let line = render_scene_error("still.json", &tiny_scene(), &["--fragments"]);
+    assert_mentions(&line, &["--fragments", "still.json", "physics"]);
+}
+
+#[test]
 fn zero_transform_scale() {
     let line = render_scene_error(
         "zero_scale.json",
