@@ -107,3 +107,88 @@ fn the_relit_scene_is_relit() {
     assert!(lighting_effect > 5.0);
     assert!(frame_change > 0.5);
 }
+
+/// One row of `--fragments`' CSV: (frame, object, pieces, largest share, debris,
+/// damaged share, height).
+type FragmentRow = (u32, String, usize, f64, usize, f64, f64);
+
+fn fragment_rows(out: &Path) -> Vec<FragmentRow> {
+    let text = std::fs::read_to_string(out.join("fragments.csv")).expect("fragments.csv");
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height")
+    );
+    lines
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[0].parse().unwrap(),
+                f[1].to_string(),
+                f[3].parse().unwrap(),
+                f[4].parse().unwrap(),
+                f[5].parse().unwrap(),
+                f[7].parse().unwrap(),
+                f[8].parse().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The fracture examples as written (not at draft quality: pieces need the scene's Δx),
+/// counted with `--fragments` (connected components of the particles, links < Δx): the
+/// watermelon breaks into pieces on impact, the jelly stays one body through its bounce,
+/// and the sandcastle slumps to under 60 % of its height, losing cohesion where it yields.
+#[test]
+fn watermelon_breaks_jelly_stays_whole_sandcastle_crumbles() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let dir = tempfile::tempdir().unwrap();
+
+    let out = dir.path().join("watermelon");
+    render(
+        &root.join("watermelon.json"),
+        &out,
+        "0..3",
+        &["--fragments"],
+    );
+    let rows = fragment_rows(&out);
+    let (_, name, pieces, largest, debris, damaged, _) = rows.last().unwrap().clone();
+    eprintln!("watermelon, frame 2: {pieces} pieces ≥ 1%, largest {largest}, debris {debris}, damaged {damaged}");
+    assert_eq!(name, "watermelon");
+    assert!(pieces >= 3, "the watermelon breaks into pieces ({pieces})");
+    assert!(largest < 0.5, "no piece keeps half the melon ({largest})");
+
+    let out = dir.path().join("jelly");
+    render(&root.join("jelly.json"), &out, "0..10", &["--fragments"]);
+    for (frame, _, pieces, largest, debris, damaged, _) in fragment_rows(&out) {
+        assert!(
+            pieces == 1 && largest == 1.0 && debris == 0 && damaged == 0.0,
+            "jelly frame {frame}: {pieces} pieces, largest {largest}, debris {debris}, damaged {damaged}"
+        );
+    }
+
+    let out = dir.path().join("sandcastle");
+    render(
+        &root.join("sandcastle.json"),
+        &out,
+        "0..12",
+        &["--fragments"],
+    );
+    let rows = fragment_rows(&out);
+    let (first, last) = (&rows[0], rows.last().unwrap());
+    eprintln!(
+        "sandcastle: height {:.3} m at frame 0, {:.3} m at frame {}; damaged {}",
+        first.6, last.6, last.0, last.5
+    );
+    assert_eq!(first.5, 0.0, "the castle starts cohesive");
+    assert!(
+        last.6 < 0.6 * first.6,
+        "the castle slumps ({:.3} m)",
+        last.6
+    );
+    assert!(
+        last.5 > 0.05,
+        "the slump breaks some of its cohesion ({})",
+        last.5
+    );
+}
