@@ -707,7 +707,10 @@ fn render(backend: Option<BackendChoice>, args: RenderArgs) -> Result<()> {
     let fail_at = fail_hook_frame()?;
     let sim_first = resume_state.as_ref().map_or(0, |cp| cp.frame);
     let mut fragment_log = match args.fragments {
-        true => Some(FragmentLog::create(&dir.join("fragments.csv"))?),
+        true => Some(FragmentLog::create(
+            &dir.join("fragments.csv"),
+            args.resume,
+        )?),
         false => None,
     };
     let mut run_frames = || -> Result<()> {
@@ -856,15 +859,24 @@ struct FragmentLog {
 }
 
 impl FragmentLog {
-    fn create(path: &Path) -> Result<Self> {
-        let mut file = std::io::BufWriter::new(
-            std::fs::File::create(path)
-                .with_context(|| format!("--fragments: cannot create {}", path.display()))?,
-        );
-        writeln!(
-            file,
-            "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height"
-        )?;
+    /// With `resume`, rows of an earlier run of the same output directory are kept and the
+    /// resumed frames appended after them.
+    fn create(path: &Path, resume: bool) -> Result<Self> {
+        let append = resume && path.is_file();
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(append)
+            .write(true)
+            .truncate(!append)
+            .open(path)
+            .with_context(|| format!("--fragments: cannot create {}", path.display()))?;
+        let mut file = std::io::BufWriter::new(file);
+        if !append {
+            writeln!(
+                file,
+                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height"
+            )?;
+        }
         Ok(Self {
             file,
             last: Vec::new(),
