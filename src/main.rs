@@ -899,19 +899,17 @@ impl FragmentLog {
             .collect();
         objects.dedup();
         for object in objects {
-            let points: Vec<glam::DVec3> = s
+            // The object's particles: its simulated parts, in particle order.
+            let particles: Vec<usize> = s
                 .parts
                 .iter()
                 .filter(|p| p.object == object && p.kind != PartKind::Static)
                 .flat_map(|p| p.start - s.static_count..p.start - s.static_count + p.len)
-                .map(|i| state.x[i])
                 .collect();
-            let damaged = s
-                .parts
+            let points: Vec<glam::DVec3> = particles.iter().map(|&i| state.x[i]).collect();
+            let damaged = particles
                 .iter()
-                .filter(|p| p.object == object && p.kind != PartKind::Static)
-                .flat_map(|p| p.start - s.static_count..p.start - s.static_count + p.len)
-                .filter(|&i| {
+                .filter(|&&i| {
                     matches!(
                         s.materials[state.material[i] as usize],
                         Material::Nacc { .. }
