@@ -2,7 +2,6 @@
 //! acceptance bullet "Analytic tests"). Each test states its tolerance and prints what it
 //! measured (`cargo test --release --test sim_cpu -- --nocapture`).
 
-use std::f64::consts::PI;
 
 use glam::{DMat3, DVec3};
 use splatter::rng::SplitMix64;
@@ -178,17 +177,6 @@ fn rigid_rotation_keeps_angular_momentum_with_apic() {
     assert!(drift[0] < 1e-2);
 }
 
-/// Zero crossings (linear interpolation) of a sampled signal, t > 0 only.
-fn zero_crossings(t: &[f64], u: &[f64]) -> Vec<f64> {
-    let mut out = Vec::new();
-    for i in 1..u.len() {
-        if u[i - 1] != 0.0 && u[i - 1].signum() != u[i].signum() {
-            out.push(t[i - 1] + (t[i] - t[i - 1]) * u[i - 1] / (u[i - 1] - u[i]));
-        }
-    }
-    out
-}
-
 /// Test 4: First axial mode of an elastic bar clamped at one end: period 4L/c within 3%.
 ///
 /// Wave speed: with ν = 0, λ = 0 and the P-wave modulus λ + 2μ equals E, so a uniaxial
@@ -199,75 +187,21 @@ fn zero_crossings(t: &[f64], u: &[f64]) -> Vec<f64> {
 /// measured from x_c to the free end. Initial velocity: the mode shape
 /// v = v₀ sin(π(x − x_c)/2L) x̂ (C its gradient), so u_end(t) ∝ sin(2πt/T).
 /// Period: from the zero crossings of the mean x-displacement of the end layer of
-/// particles, T = 2 (t_last − t_first)/(crossings − 1).
+/// particles, a least-squares line through crossing time against index (half a period
+/// apart; `study::fit::period_from_crossings`).
 #[test]
 fn elastic_bar_first_axial_mode_period() {
-    let (len, e, rho) = (1.0f64, 1.0f64, 1.0f64);
-    let c = (e / rho).sqrt();
-    let dx = len / 40.0;
-    let a = 4.0 * dx; // cross-section a × a
-    let band = 3.0;
-    let margin = 5.0 * dx; // beyond the band on the free sides
-    let lo = DVec3::ZERO;
-    let xc = lo.x + (band - 1.0) * dx;
-    let hi = DVec3::new(xc + len + margin + band * dx, 0.0, 0.0)
-        + DVec3::new(0.0, 1.0, 1.0) * (a + 2.0 * (margin + band * dx));
-    let mut g = Grid::new(lo, hi, dx);
-    let walls = {
-        let mut w = DomainWalls::uniform(Condition::SEPARATE);
-        w.faces[0] = Condition::STICKY;
-        w
-    };
-    let mat = Material::fixed_corotated(e, 0.0);
-    let mats = [mat];
-    let y0 = band * dx + margin;
-    let mut p = Particles::sample_box(
-        DVec3::new(xc - dx, y0, y0),
-        DVec3::new(xc + len, y0 + a, y0 + a),
-        dx / 2.0,
-        rho,
-    );
-    let v0 = 1e-3 * c;
-    let k = PI / (2.0 * len);
-    for q in 0..p.len() {
-        let s = p.x[q].x - xc;
-        if s > 0.0 {
-            p.v[q] = DVec3::X * v0 * (k * s).sin();
-            p.c[q].x_axis.x = v0 * k * (k * s).cos();
-        }
-    }
-    let x0 = p.x.clone();
-    let end: Vec<usize> = (0..p.len())
-        .filter(|&q| x0[q].x > xc + len - dx / 2.0)
-        .collect();
-    let dt = cfl_dt(&mat, rho, dx, 0.4);
-    let period = 4.0 * len / c;
-    let steps = (2.3 * period / dt).ceil() as usize;
-    let sp = params(
-        dt,
-        DVec3::ZERO,
-        Boundaries {
-            walls,
-            colliders: vec![],
-        },
-    );
-    let (mut ts, mut us) = (vec![0.0], vec![0.0]);
-    run(&mut p, &mut g, &mats, &sp, steps, |n, p| {
-        ts.push(n as f64 * dt);
-        us.push(end.iter().map(|&q| p.x[q].x - x0[q].x).sum::<f64>() / end.len() as f64);
-    });
-    let zc = zero_crossings(&ts, &us);
-    assert!(zc.len() >= 3, "{zc:?}");
-    let measured = 2.0 * (zc[zc.len() - 1] - zc[0]) / (zc.len() - 1) as f64;
-    let amp = us.iter().fold(0.0f64, |m, u| m.max(u.abs()));
+    // The convergence study's bar (`study::convergence::bar`): L/Δx = 40, CFL 0.4, 2³
+    // particles per cell, 2.3 periods.
+    let r = splatter::study::convergence::bar(40, 0.4, 2, "test");
+    let (measured, period) = (r.measured.expect("period measured"), r.exact.unwrap());
     let err = measured / period - 1.0;
     println!(
-        "elastic bar, {} particles, {steps} steps: period {measured:.5} vs 4L/c = {period:.5} \
-         ({:+.2}%, tol 3%), {} zero crossings, end amplitude {amp:.2e} (v₀/ω = {:.2e})",
-        p.len(),
-        100.0 * err,
-        zc.len(),
-        v0 * period / (2.0 * PI)
+        "elastic bar, {} particles, {} steps: period {measured:.5} vs 4L/c = {period:.5} \
+         ({:+.2}%, tol 3%)",
+        r.particles,
+        r.steps,
+        100.0 * err
     );
     assert!(err.abs() < 0.03);
 }

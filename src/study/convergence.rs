@@ -173,8 +173,9 @@ fn params(dt: f64, walls: DomainWalls, colliders: Vec<PlaneCollider>) -> StepPar
 /// (`sim::cpu` module docs); material starts one cell before it.
 const BAND: f64 = 3.0;
 
-/// Elastic bar, L = 1, c = 1, `cells` cells along it, cross-section 4Δx (exact for ν = 0).
-fn bar(cells: u32, cfl: f64, ppc_axis: u32, sweep: &str) -> ConvRun {
+/// Elastic bar, L = 1, c = 1, `cells` cells along it, cross-section 4Δx (exact for ν = 0);
+/// also `tests/sim_cpu.rs`'s bar test.
+pub fn bar(cells: u32, cfl: f64, ppc_axis: u32, sweep: &str) -> ConvRun {
     let (len, e, rho) = (1.0f64, 1.0f64, 1.0f64);
     let c = (e / rho).sqrt();
     let dx = len / f64::from(cells);
