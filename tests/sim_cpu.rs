@@ -2,7 +2,6 @@
 //! acceptance bullet "Analytic tests"). Each test states its tolerance and prints what it
 //! measured (`cargo test --release --test sim_cpu -- --nocapture`).
 
-
 use glam::{DMat3, DVec3};
 use splatter::rng::SplitMix64;
 use splatter::sim::cpu::{
