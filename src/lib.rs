@@ -13,6 +13,7 @@ pub mod output;
 pub mod relight;
 pub mod render;
 pub mod rng;
+pub mod run;
 pub mod scene;
 pub mod sim;
 pub mod splat;

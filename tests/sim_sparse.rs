@@ -118,9 +118,9 @@ fn an_overflowing_pool_is_reported_and_grown() {
     assert!(!sim.fit_pool(&gpu, &w2).unwrap());
 }
 
-/// Steps that overflow the pool are re-run from a saved state with a grown pool (what
-/// `splatter render` does per frame): the result equals a run that never overflowed, bit
-/// for bit on the gather path.
+/// `GpuSim::step_frame` (what a run does per frame) re-runs steps that overflow the pool
+/// from a saved state with a grown pool: the result equals a run that never overflowed,
+/// bit for bit on the gather path.
 #[test]
 fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
     let (p, grid, materials, params) = fruit();
@@ -133,20 +133,10 @@ fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
 
     let mut sim = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
     sim.set_pool_blocks(&gpu, 4).unwrap();
-    let mut reruns = 0;
-    loop {
-        assert!(sim.pool_can_overflow());
-        sim.save_state(&gpu).unwrap();
-        sim.step(&gpu, steps).unwrap();
-        let w = sim.take_watchdog(&gpu).unwrap();
-        if w.pool_overflow == 0 {
-            break;
-        }
-        sim.restore_state(&gpu).unwrap();
-        assert!(sim.fit_pool(&gpu, &w).unwrap());
-        reruns += 1;
-        assert!(reruns < 10, "the pool keeps overflowing");
-    }
+    assert!(sim.pool_can_overflow());
+    let frame = sim.step_frame(&gpu, steps, 0.0).unwrap();
+    let reruns = frame.reruns;
+    assert_eq!(frame.watchdog.pool_overflow, 0);
     let got = sim.read_particles(&gpu, &p).unwrap();
     eprintln!("{reruns} rerun(s), pool {} blocks", sim.pool_blocks());
     assert!(reruns > 0, "test setup: the small pool must overflow");

@@ -293,6 +293,14 @@ pub enum P2gPath {
 }
 
 impl P2gPath {
+    /// As the manifest and the command line name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            P2gPath::Gather => "gather",
+            P2gPath::Atomic => "atomic",
+        }
+    }
+
     /// Atomics where the adapter has them, else the gather.
     pub fn best(gpu: &GpuContext) -> P2gPath {
         if gpu.features.float32_atomics {

@@ -25,6 +25,7 @@ pub mod bspline;
 pub mod cpu;
 pub mod derive;
 pub mod elasticity;
+pub mod frame;
 pub mod gpu;
 pub mod kinematic;
 pub mod nacc;

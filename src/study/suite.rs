@@ -21,6 +21,7 @@ use crate::bench::{RenderTiming, SimTiming};
 use crate::gpu::GpuContext;
 use crate::output::manifest::Manifest;
 use crate::render::{Camera, GpuRenderer};
+use crate::run::{one_line, Input, Run, RunOptions};
 
 /// One row of SPEC §9's table: what the paper reports for an example.
 #[derive(Clone, Copy, Debug)]
@@ -164,7 +165,7 @@ pub fn run_suite(
     let paper = PAPER_EXAMPLES.iter().map(|e| (e.name, Some(e)));
     let extra = EXTRA_SCENES.iter().map(|name| (*name, None));
     for (name, example) in paper.chain(extra) {
-        let row = end_to_end_example(name, example, opts);
+        let row = end_to_end_example(gpu, name, example, opts);
         writeln!(log, "end to end {name}: {}", summary(&row))?;
         end_to_end.push(row);
     }
@@ -258,7 +259,12 @@ fn render_cases(
 }
 
 /// Runs one scene end to end, or says why not.
-fn end_to_end_example(name: &str, example: Option<&PaperExample>, opts: &SuiteOptions) -> EndToEnd {
+fn end_to_end_example(
+    gpu: &GpuContext,
+    name: &str,
+    example: Option<&PaperExample>,
+    opts: &SuiteOptions,
+) -> EndToEnd {
     let scene = opts.scenes.join(format!("{name}.json"));
     let mut row = EndToEnd {
         example: name.to_string(),
@@ -272,7 +278,7 @@ fn end_to_end_example(name: &str, example: Option<&PaperExample>, opts: &SuiteOp
         row.note = Some(format!("no {}", scene.display()));
         return row;
     }
-    match run_render(&scene, opts) {
+    match run_render(gpu, &scene, opts) {
         Ok(run) => {
             row.status = "ran".into();
             row.run = Some(run);
@@ -286,9 +292,9 @@ fn end_to_end_example(name: &str, example: Option<&PaperExample>, opts: &SuiteOp
     row
 }
 
-/// `splatter render` of `scene` (coarsened by `opts.scale`) in a child process, frames
-/// 0..opts.frames, then the per-frame timings from its manifest.
-fn run_render(scene: &Path, opts: &SuiteOptions) -> Result<EndToEndRun> {
+/// A run of `scene` (coarsened by `opts.scale`), frames 0..opts.frames, through the
+/// library's [`Run`], then the per-frame timings from its manifest.
+fn run_render(gpu: &GpuContext, scene: &Path, opts: &SuiteOptions) -> Result<EndToEndRun> {
     let tmp = std::env::temp_dir().join(format!("splatter-suite-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
     let scene_file = tmp.join("scene.json");
@@ -300,45 +306,22 @@ fn run_render(scene: &Path, opts: &SuiteOptions) -> Result<EndToEndRun> {
     std::fs::write(&scene_file, serde_json::to_string(&value)?)?;
     let frames_dir = tmp.join("frames");
     let _ = std::fs::remove_dir_all(&frames_dir);
-    let exe = own_executable()?;
-    let start = Instant::now();
-    let output = std::process::Command::new(&exe)
-        .arg("render")
-        .arg(&scene_file)
-        .arg("--out")
-        .arg(&frames_dir)
-        .args(["--frames", &format!("0..{}", opts.frames)])
-        .args(["--width", &opts.width.to_string()])
-        .args(["--height", &opts.height.to_string()])
-        .args(["--checkpoint-every", "0"])
-        .output()
-        .with_context(|| format!("cannot run {}", exe.display()))?;
-    let wall_s = start.elapsed().as_secs_f64();
-    let result = if output.status.success() {
-        read_manifest(&frames_dir, wall_s)
-    } else {
-        let err = String::from_utf8_lossy(&output.stderr);
-        let line = err.lines().rfind(|l| l.starts_with("error")).unwrap_or("");
-        Err(anyhow::anyhow!("render failed: {line}"))
+    let run_opts = RunOptions {
+        input: Input::Scene(Some(scene_file)),
+        out: Some(frames_dir.clone()),
+        frames: Some(format!("0..{}", opts.frames)),
+        width: Some(opts.width),
+        height: Some(opts.height),
+        checkpoint_every: 0,
+        ..RunOptions::default()
     };
+    let start = Instant::now();
+    let result = Run::prepare(run_opts)
+        .and_then(|run| run.execute(gpu, &mut |_| {}))
+        .map_err(|e| anyhow::anyhow!("render failed: {}", one_line(&e)))
+        .and_then(|_| read_manifest(&frames_dir, start.elapsed().as_secs_f64()));
     let _ = std::fs::remove_dir_all(&tmp);
     result
-}
-
-/// This program's path. A rebuild while the suite runs replaces the file, and Linux then
-/// reports the old inode as "PATH (deleted)": the new build at PATH is used instead.
-fn own_executable() -> Result<PathBuf> {
-    let exe = std::env::current_exe()?;
-    if exe.exists() {
-        return Ok(exe);
-    }
-    let text = exe.to_string_lossy();
-    let stripped = PathBuf::from(text.trim_end_matches(" (deleted)"));
-    if stripped.exists() {
-        Ok(stripped)
-    } else {
-        anyhow::bail!("cannot find this program's executable ({})", exe.display())
-    }
 }
 
 /// Per-frame means of the frames after 0 (frame 0 runs no steps).

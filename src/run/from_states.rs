@@ -1,0 +1,165 @@
+//! `--from-states DIR`: each frame's Gaussians from `DIR/frame_NNNNN.ply`, rendered with the
+//! scene's camera and output settings; no build, no simulation.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::Result;
+use glam::Vec3;
+
+use super::{check_manifest_for_resume, create_dir, Event, Job, Summary};
+use crate::checkpoint;
+use crate::gpu::GpuContext;
+use crate::limits;
+use crate::output::manifest::{manifest_path, FrameTiming, ManifestWriter, Settings};
+use crate::output::{frame_path, FrameWriter};
+use crate::render::{GpuRenderer, Splats};
+
+pub(super) fn execute(
+    job: Job,
+    states: &Path,
+    gpu: &GpuContext,
+    on_event: &mut dyn FnMut(Event),
+) -> Result<Summary> {
+    let scene = &job.scene;
+    // The scene's settings only: its objects come from the states.
+    let hash = checkpoint::scene_hash(scene, &Splats::default(), None);
+    let dir = scene.output_dir();
+    create_dir(&dir, "output directory")?;
+    on_event(Event::Note(format!("adapter: {}", gpu.describe())));
+    let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
+    let (width, height) = (scene.output.width, scene.output.height);
+    limits::check_gpu(gpu, &limits::render_needs(0, width, height))?;
+    if job.opts.resume {
+        check_manifest_for_resume(&manifest_file, hash)?;
+    }
+    on_event(Event::Note(format!(
+        "states: {}, {}×{}, frames {}..{} → {}",
+        states.display(),
+        width,
+        height,
+        job.frames.start,
+        job.frames.end,
+        dir.display()
+    )));
+    let settings = Settings {
+        width,
+        height,
+        fps: scene.output.fps,
+        frames: [job.frames.start, job.frames.end],
+        scene_frames: scene.frame_count(),
+        deterministic: job.opts.deterministic,
+        from_states: Some(states.to_path_buf()),
+        ..Default::default()
+    };
+    let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
+    manifest.write_now()?;
+    let workers = FrameWriter::default_workers();
+    let mut frames = StateFrames {
+        job: &job,
+        gpu,
+        states,
+        dir: &dir,
+        renderer: GpuRenderer::new(gpu),
+        writer: FrameWriter::new(workers, 2 * workers),
+        manifest: &mut manifest,
+        rendered: 0,
+        gpu_ms: 0.0,
+    };
+    let render_start = Instant::now();
+    on_event(Event::Frames(job.frames.clone()));
+    let result = frames.run(on_event);
+    let StateFrames {
+        writer,
+        rendered,
+        gpu_ms,
+        ..
+    } = frames;
+    job.finish(result, writer, &mut manifest, &dir, on_event)?;
+    Ok(Summary {
+        rendered,
+        render_seconds: render_start.elapsed().as_secs_f64(),
+        total_seconds: job.started.elapsed().as_secs_f64(),
+        gpu_ms,
+        png_workers: workers,
+        manifest: manifest.path().to_path_buf(),
+        fragments: Vec::new(),
+    })
+}
+
+struct StateFrames<'a> {
+    job: &'a Job,
+    gpu: &'a GpuContext,
+    states: &'a Path,
+    dir: &'a Path,
+    renderer: GpuRenderer,
+    writer: FrameWriter,
+    manifest: &'a mut ManifestWriter,
+    rendered: u32,
+    gpu_ms: f64,
+}
+
+impl StateFrames<'_> {
+    fn run(&mut self, on_event: &mut dyn FnMut(Event)) -> Result<()> {
+        for frame in self.job.frames.clone() {
+            on_event(Event::FrameStart(frame));
+            if self.job.opts.resume && frame_path(self.dir, frame).is_file() {
+                on_event(Event::FrameDone {
+                    frame,
+                    skipped: true,
+                });
+                continue;
+            }
+            self.frame(frame)?;
+            on_event(Event::FrameDone {
+                frame,
+                skipped: false,
+            });
+        }
+        Ok(())
+    }
+
+    /// Load, upload (relit when the scene has lights), render and queue one frame.
+    fn frame(&mut self, frame: u32) -> Result<()> {
+        let (gpu, scene) = (self.gpu, &self.job.scene);
+        let (width, height) = (scene.output.width, scene.output.height);
+        let t0 = Instant::now();
+        let (splats, skipped) = crate::farm::load_state(self.states, frame)?;
+        if skipped > 0 {
+            log::warn!(
+                "frame {frame}: {skipped} NaN or degenerate Gaussians in its state were skipped"
+            );
+        }
+        limits::check_gpu(gpu, &limits::render_needs(splats.len(), width, height))?;
+        self.renderer.upload(gpu, &splats)?;
+        if let Some(l) = crate::scene::lighting::prepare_state(scene, &splats)? {
+            self.renderer.set_lighting(gpu, &l.setup)?;
+            self.renderer
+                .set_lights(&l.lights.at(frame as f32 / scene.output.fps));
+        }
+        let load_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let t1 = Instant::now();
+        let background = Vec3::from(scene.output.background);
+        let (image, timings) =
+            self.renderer
+                .render_timed(gpu, &self.job.path.camera(frame), background)?;
+        self.gpu_ms += timings.render_ms + timings.readback_ms;
+        self.writer.submit(
+            frame_path(self.dir, frame),
+            image.width,
+            image.height,
+            image.rgba,
+        )?;
+        self.manifest.frame_done(
+            frame,
+            FrameTiming {
+                simulate_ms: 0.0,
+                load_ms: Some(load_ms),
+                render_ms: t1.elapsed().as_secs_f64() * 1e3,
+                gpu_ms: timings.render_ms + timings.readback_ms,
+            },
+        )?;
+        self.rendered += 1;
+        Ok(())
+    }
+}

@@ -1,0 +1,141 @@
+//! A run's input: the scene file (or the default scene, or a quick look at a capture) with
+//! the command line's overrides, its camera path and the frames to render.
+
+use std::ops::Range;
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use glam::Vec3;
+
+use super::{Input, RunOptions};
+use crate::render::Splats;
+use crate::scene::{self, BuildReport, CameraPath, Scene};
+
+/// Parse `A..B`, `A..`, `..B` or `A` against `count` frames into a half-open range.
+pub fn frame_range(spec: Option<&str>, count: u32) -> Result<Range<u32>> {
+    let Some(spec) = spec else {
+        return Ok(0..count);
+    };
+    let num = |s: &str, default: u32| -> Result<u32> {
+        if s.trim().is_empty() {
+            Ok(default)
+        } else {
+            s.trim()
+                .parse()
+                .with_context(|| format!("--frames {spec:?}: {s:?} is not a frame number"))
+        }
+    };
+    let range = match spec.split_once("..") {
+        Some((a, b)) => num(a, 0)?..num(b, count)?,
+        None => {
+            let a = num(spec, 0)?;
+            a..a.saturating_add(1)
+        }
+    };
+    if range.start >= range.end || range.end > count {
+        bail!("--frames {spec:?}: expected a non-empty range within 0..{count} (the scene has {count} frames)");
+    }
+    Ok(range)
+}
+
+/// `--width`/`--height` within what the renderer supports.
+pub(super) fn check_image_size(opts: &RunOptions) -> Result<()> {
+    for (flag, value) in [("--width", opts.width), ("--height", opts.height)] {
+        if let Some(v) = value {
+            if !(1..=scene::MAX_IMAGE_SIZE).contains(&v) {
+                bail!(
+                    "{flag} {v}: expected an image size in pixels in 1..={}",
+                    scene::MAX_IMAGE_SIZE
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The scene file (or the default scene) with quality and overrides applied, and its
+/// camera path.
+pub(super) fn load_scene(file: Option<&Path>, opts: &RunOptions) -> Result<(Scene, CameraPath)> {
+    let mut scene = match file {
+        Some(path) => scene::load(path)?,
+        None => scene::default_scene(),
+    };
+    scene.apply_quality(opts.quality);
+    scene.with_overrides(opts.out.clone(), opts.width, opts.height)?;
+    let path = scene.camera_path()?;
+    Ok((scene, path))
+}
+
+/// The scene, its camera path and its Gaussians.
+pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
+    let (scene, path, splats, report) = match &opts.input {
+        Input::Ply {
+            file,
+            cameras,
+            camera,
+        } => quick_look(opts, file, cameras.as_deref(), *camera)?,
+        Input::Scene(file) => {
+            let (scene, path) = load_scene(file.as_deref(), opts)?;
+            let (splats, report) = scene.build_splats()?;
+            (scene, path, splats, report)
+        }
+        Input::States { .. } => unreachable!("states are loaded per frame"),
+    };
+    for w in report.warnings() {
+        log::warn!("{w}");
+    }
+    Ok((scene, path, splats, report))
+}
+
+/// `--ply FILE`: the capture alone, framed by an orbit round its bounds, or seen from a
+/// camera of an INRIA `cameras.json`.
+fn quick_look(
+    opts: &RunOptions,
+    ply: &Path,
+    cameras: Option<&Path>,
+    camera: Option<usize>,
+) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
+    let text = format!(
+        r#"{{"output": {{"width": {w}, "height": {h}, "frames": 60}},
+            "camera": {{"fov_y_deg": 50, "path": {{"type": "orbit", "target": [0, 0, 0], "radius": 1}}}},
+            "objects": [{{"ply": {p}}}]}}"#,
+        w = opts.width.unwrap_or(1280),
+        h = opts.height.unwrap_or(720),
+        p = serde_json::to_string(&ply.to_string_lossy())?,
+    );
+    let stem = ply
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "ply".into());
+    let mut scene = scene::parse(&text, &format!("--ply {}", ply.display()), Path::new("."))?;
+    scene.name = stem;
+    scene.with_overrides(opts.out.clone(), None, None)?;
+    let (splats, report) = scene.build_splats()?;
+    let path = match cameras {
+        Some(file) => {
+            let cameras = scene::from_cameras_json(file, opts.width, opts.height)?;
+            let index = camera.unwrap_or(0);
+            let Some(camera) = cameras.get(index) else {
+                bail!(
+                    "--camera {index}: {} has {} cameras (valid: 0..{})",
+                    file.display(),
+                    cameras.len(),
+                    cameras.len()
+                );
+            };
+            scene.output.frames = 1;
+            scene.output.width = camera.width;
+            scene.output.height = camera.height;
+            CameraPath::still(*camera)
+        }
+        None => {
+            let bounds = splats.means.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            );
+            let (w, h) = (scene.output.width, scene.output.height);
+            CameraPath::orbit_framing(bounds, Vec3::Z, 50.0, w, h, scene.output.frames)
+        }
+    };
+    Ok((scene, path, splats, report))
+}

@@ -1,0 +1,359 @@
+//! A run: a scene (or a capture, or a folder of per-frame states) rendered to frames.
+//!
+//! [`Run::prepare`] does the CPU part (load and build the scene, choose the frames, check
+//! the output options); [`Run::execute`] sets up the GPU work and runs the frames:
+//!
+//! ```text
+//! simulation setup → (resume: manifest, checkpoint) → upload, lighting, simulation, derive
+//! for frame: step (re-run on pool overflow) → watchdog → [checkpoint] → [fragments]
+//!            → derive → [export] → render → writer → manifest
+//! writer.finish → manifest complete → [video]
+//! ```
+//!
+//! Progress is reported as [`Event`]s: the command line prints them; tests and the bench
+//! suite may ignore them.
+
+mod fragments;
+mod from_states;
+mod input;
+mod scene_run;
+
+pub use fragments::FragmentLog;
+pub use input::frame_range;
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+
+use crate::gpu::GpuContext;
+use crate::output::manifest::{Manifest, ManifestWriter, Settings};
+use crate::output::{frame_path, FrameWriter};
+use crate::render::Splats;
+use crate::scene::quality::Quality;
+use crate::scene::{BuildReport, CameraPath, Scene};
+use crate::study::fragments::FragmentSummary;
+
+/// Where a run's Gaussians come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Input {
+    /// A scene file, or the embedded default scene (`None`).
+    Scene(Option<PathBuf>),
+    /// A quick look at a capture: an orbit framing its bounds, or a camera of an INRIA
+    /// `cameras.json` (index `camera`, default 0).
+    Ply {
+        file: PathBuf,
+        cameras: Option<PathBuf>,
+        camera: Option<usize>,
+    },
+    /// Render-only: each frame's Gaussians from `dir/frame_NNNNN.ply` (as written by
+    /// `--export-ply`); the scene gives the camera path and output settings.
+    States {
+        scene: Option<PathBuf>,
+        dir: PathBuf,
+    },
+}
+
+/// What to run and how: the library form of `splatter render`'s options.
+#[derive(Clone, Debug)]
+pub struct RunOptions {
+    pub input: Input,
+    /// Output directory (overrides the scene's `output.dir`).
+    pub out: Option<PathBuf>,
+    /// Frames to render: `A..B`, `A..`, `..B` or `A` (see [`frame_range`]).
+    pub frames: Option<String>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub quality: Quality,
+    /// Also write each frame's Gaussians as a 3DGS PLY into this directory.
+    pub export_ply: Option<PathBuf>,
+    /// Skip frames already written and restart the simulation from the checkpoint.
+    pub resume: bool,
+    /// Sum P2G in a fixed order: bit-identical frames on the same adapter.
+    pub deterministic: bool,
+    /// Save the simulation state every N frames (0: never).
+    pub checkpoint_every: u32,
+    /// Assemble the frames into this video with ffmpeg.
+    pub video: Option<PathBuf>,
+    /// Count the pieces of every simulated object per frame (`OUT/fragments.csv`).
+    pub fragments: bool,
+}
+
+impl Default for RunOptions {
+    /// The embedded default scene as written.
+    fn default() -> Self {
+        RunOptions {
+            input: Input::Scene(None),
+            out: None,
+            frames: None,
+            width: None,
+            height: None,
+            quality: Quality::Standard,
+            export_ply: None,
+            resume: false,
+            deterministic: false,
+            checkpoint_every: 10,
+            video: None,
+            fragments: false,
+        }
+    }
+}
+
+/// What a run reports as it goes.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Event {
+    /// A line for the user (the adapter, the scene's size, resume decisions, …).
+    Note(String),
+    /// The frame loop starts: `frames` is what will be rendered or skipped.
+    Frames(Range<u32>),
+    /// Frame `frame` is about to be simulated (or loaded) and rendered.
+    FrameStart(u32),
+    /// Frame `frame` is rendered (queued for writing), or was already written (`skipped`,
+    /// with `--resume`).
+    FrameDone { frame: u32, skipped: bool },
+    /// Every frame is on disk.
+    FramesWritten,
+}
+
+/// What a finished run did.
+#[derive(Clone, Debug, Default)]
+pub struct Summary {
+    pub rendered: u32,
+    /// Wall time of the frame loop and of the whole run, in seconds.
+    pub render_seconds: f64,
+    pub total_seconds: f64,
+    /// GPU render + readback, summed over the rendered frames, in milliseconds.
+    pub gpu_ms: f64,
+    pub png_workers: usize,
+    pub manifest: PathBuf,
+    /// `--fragments`: each simulated object's pieces at the last rendered frame.
+    pub fragments: Vec<(String, u32, FragmentSummary)>,
+}
+
+impl Summary {
+    /// The closing line of `splatter render`.
+    pub fn describe(&self) -> String {
+        let n = f64::from(self.rendered.max(1));
+        format!(
+            "done: {} frames rendered in {:.2} s ({:.3} s/frame; GPU render+readback {:.1} ms/frame; {} PNG worker thread(s)); total {:.2} s with scene build",
+            self.rendered,
+            self.render_seconds,
+            self.render_seconds / n,
+            self.gpu_ms / n,
+            self.png_workers,
+            self.total_seconds
+        )
+    }
+}
+
+/// A prepared run: the scene loaded and built on the CPU, nothing on the GPU yet.
+pub struct Run {
+    opts: RunOptions,
+    started: Instant,
+    ffmpeg: Option<PathBuf>,
+    scene: Scene,
+    path: CameraPath,
+    frames: Range<u32>,
+    source: Source,
+}
+
+enum Source {
+    Built { splats: Splats, report: BuildReport },
+    States(PathBuf),
+}
+
+impl Run {
+    /// Load and build the scene, check the options, choose the frames (CPU only, so that
+    /// a bad scene file is reported before a GPU is opened).
+    pub fn prepare(opts: RunOptions) -> Result<Run> {
+        let started = Instant::now();
+        let ffmpeg = match &opts.video {
+            Some(v) => Some(crate::output::video::preflight(v)?),
+            None => None,
+        };
+        input::check_image_size(&opts)?;
+        let (scene, path, frames, source) = match &opts.input {
+            Input::States { scene, dir } => {
+                let (scene, path) = input::load_scene(scene.as_deref(), &opts)?;
+                let frames = frame_range(opts.frames.as_deref(), scene.frame_count())?;
+                crate::farm::check_states(dir, frames.clone())?;
+                (scene, path, frames, Source::States(dir.clone()))
+            }
+            Input::Scene(_) | Input::Ply { .. } => {
+                let (scene, path, splats, report) = input::build(&opts)?;
+                let frames = frame_range(opts.frames.as_deref(), scene.frame_count())?;
+                (scene, path, frames, Source::Built { splats, report })
+            }
+        };
+        Ok(Run {
+            opts,
+            started,
+            ffmpeg,
+            scene,
+            path,
+            frames,
+            source,
+        })
+    }
+
+    /// The scene as prepared (quality and overrides applied).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The frames this run renders.
+    pub fn frames(&self) -> Range<u32> {
+        self.frames.clone()
+    }
+
+    /// Run every frame on `gpu`, reporting progress to `on_event`.
+    pub fn execute(self, gpu: &GpuContext, on_event: &mut dyn FnMut(Event)) -> Result<Summary> {
+        let Run {
+            opts,
+            started,
+            ffmpeg,
+            scene,
+            path,
+            frames,
+            source,
+        } = self;
+        let job = Job {
+            opts,
+            started,
+            ffmpeg,
+            scene,
+            path,
+            frames,
+        };
+        match source {
+            Source::Built { splats, report } => {
+                scene_run::execute(job, splats, report, gpu, on_event)
+            }
+            Source::States(dir) => from_states::execute(job, &dir, gpu, on_event),
+        }
+    }
+}
+
+/// The parts of a prepared run both input modes use.
+struct Job {
+    opts: RunOptions,
+    started: Instant,
+    ffmpeg: Option<PathBuf>,
+    scene: Scene,
+    path: CameraPath,
+    frames: Range<u32>,
+}
+
+impl Job {
+    /// How the manifest names the input.
+    fn input_name(&self) -> String {
+        match &self.opts.input {
+            Input::Scene(Some(p)) | Input::States { scene: Some(p), .. } => p.display().to_string(),
+            Input::Ply { file, .. } => format!("--ply {}", file.display()),
+            Input::Scene(None) | Input::States { scene: None, .. } => "<default scene>".into(),
+        }
+    }
+
+    /// A frame counts as done for `--resume` when its PNG (and, with --export-ply, its
+    /// PLY) exists: both are written to a temporary name and renamed, so existing means
+    /// complete.
+    fn frame_done(&self, dir: &Path, frame: u32) -> bool {
+        frame_path(dir, frame).is_file()
+            && self
+                .opts
+                .export_ply
+                .as_deref()
+                .is_none_or(|d| crate::output::export::frame_ply_path(d, frame).is_file())
+    }
+
+    /// The manifest of this run; with `--resume`, the frame timings of an earlier run of
+    /// the same scene are kept.
+    fn manifest(
+        &self,
+        path: PathBuf,
+        hash: u64,
+        gpu: &GpuContext,
+        settings: Settings,
+    ) -> ManifestWriter {
+        let mut m = Manifest::new(self.input_name(), hash, gpu.describe(), settings);
+        if self.opts.resume {
+            if let Some(old) = Manifest::read(&path) {
+                if old.scene_hash == m.scene_hash {
+                    m.frames = old.frames;
+                }
+            }
+        }
+        ManifestWriter::new(path, m, self.started)
+    }
+
+    /// After the frame loop: wait for the writer, record the outcome in the manifest, and
+    /// assemble the video.
+    fn finish(
+        &self,
+        result: Result<()>,
+        writer: FrameWriter,
+        manifest: &mut ManifestWriter,
+        dir: &Path,
+        on_event: &mut dyn FnMut(Event),
+    ) -> Result<()> {
+        let result = result.and_then(|()| writer.finish().map(|_| ()).map_err(Into::into));
+        on_event(Event::FramesWritten);
+        if let Err(e) = result {
+            // The run's error is what matters; a manifest that cannot be written (a full
+            // disk) must not hide it.
+            let _ = manifest.finish(Some(one_line(&e)));
+            return Err(e);
+        }
+        if let (Some(ffmpeg), Some(video)) = (&self.ffmpeg, &self.opts.video) {
+            on_event(Event::Note(format!("video: {} (ffmpeg)", video.display())));
+            let fps = self.scene.output.fps;
+            if let Err(e) =
+                crate::output::video::assemble(ffmpeg, dir, self.frames.clone(), fps, video)
+            {
+                let e = anyhow::Error::from(e);
+                let _ = manifest.finish(Some(one_line(&e)));
+                return Err(e);
+            }
+        }
+        manifest.finish(None)?;
+        Ok(())
+    }
+}
+
+/// `--resume` into a folder whose manifest names another scene is refused (its frames
+/// would be mixed with this scene's).
+fn check_manifest_for_resume(path: &Path, hash: u64) -> Result<()> {
+    if let Some(m) = Manifest::read(path) {
+        let ours = format!("{hash:016x}");
+        if m.scene_hash != ours {
+            bail!(
+                "--resume: {} is the manifest of a run of a different scene (scene hash {}, this run {ours}): the scene file, a file it loads, or --width/--height changed since; render into another --out, or run without --resume to start over",
+                path.display(),
+                m.scene_hash
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The error and its causes on one line, leaving out a cause whose text the message already
+/// carries (our error types print their source, as wgpu's and io's errors are terse).
+pub fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = e.to_string();
+    for cause in e.chain().skip(1) {
+        let text = cause.to_string();
+        if !msg.contains(&text) {
+            msg.push_str(": ");
+            msg.push_str(&text);
+        }
+    }
+    msg.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The output directory, created.
+fn create_dir(dir: &Path, what: &str) -> Result<()> {
+    use anyhow::Context;
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create the {what} {}", dir.display()))
+}

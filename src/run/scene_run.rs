@@ -1,0 +1,534 @@
+//! A built scene run frame by frame: simulate, checkpoint, derive, render, write.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use glam::{DVec3, Vec3};
+
+use super::{check_manifest_for_resume, create_dir, Event, FragmentLog, Job, Summary};
+use crate::checkpoint::{self, checkpoint_path, Checkpoint};
+use crate::gpu::GpuContext;
+use crate::limits;
+use crate::output::manifest::{manifest_path, FrameTiming, ManifestWriter, Settings};
+use crate::output::{frame_path, FrameWriter};
+use crate::relight::gpu_normals::GpuNormals;
+use crate::render::{GpuRenderer, Splats};
+use crate::scene::kinematic::KinematicObject;
+use crate::scene::lighting::SceneLighting;
+use crate::scene::simulation::SimulationSetup;
+use crate::scene::{self, BuildReport};
+use crate::sim::derive::{Derive, RigidDerive};
+use crate::sim::frame::FrameError;
+use crate::sim::gpu::{GpuSim, P2gPath, Watchdog};
+use crate::splat::sh::ShRotator;
+
+pub(super) fn execute(
+    job: Job,
+    splats: Splats,
+    report: BuildReport,
+    gpu: &GpuContext,
+    on_event: &mut dyn FnMut(Event),
+) -> Result<Summary> {
+    let opts = &job.opts;
+    let scene = &job.scene;
+    let simulated = scene.objects.iter().any(|o| o.physics.is_some());
+    if simulated {
+        check_grid_fits(gpu, scene)?;
+    }
+    let setup = scene::simulation::prepare(scene, splats.clone(), &report)?;
+    if opts.fragments && setup.is_none() {
+        let name = match &opts.input {
+            super::Input::Scene(Some(p)) => p.display().to_string(),
+            _ => "the default scene".into(),
+        };
+        bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
+    }
+    let hash = checkpoint::scene_hash(scene, &splats, setup.as_ref());
+    let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
+    let dir = scene.output_dir();
+    create_dir(&dir, "output directory")?;
+    if let Some(d) = &opts.export_ply {
+        create_dir(d, "PLY export directory")?;
+    }
+    on_event(Event::Note(format!("adapter: {}", gpu.describe())));
+    let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
+    let (width, height) = (scene.output.width, scene.output.height);
+    let mut needs = limits::render_needs(splats.len(), width, height);
+    if let Some(s) = &setup {
+        needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
+    }
+    limits::check_gpu(gpu, &needs)?;
+    if opts.resume {
+        check_manifest_for_resume(&manifest_file, hash)?;
+    }
+    let first_missing = if opts.resume {
+        job.frames.clone().find(|f| !job.frame_done(&dir, *f))
+    } else {
+        Some(job.frames.start)
+    };
+    let p2g = if opts.deterministic {
+        P2gPath::Gather
+    } else {
+        P2gPath::best(gpu)
+    };
+    let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
+    on_event(Event::Note(format!(
+        "scene: {} Gaussians, {}×{}, frames {}..{} → {}",
+        splats.len(),
+        width,
+        height,
+        job.frames.start,
+        job.frames.end,
+        dir.display()
+    )));
+    let mut renderer = GpuRenderer::new(gpu);
+    renderer.upload(gpu, &splats)?;
+    // Relighting before the derive pass is built: derive moves the simulated normals.
+    let lighting = scene::lighting::prepare(
+        scene,
+        &splats,
+        &report,
+        setup.as_ref().map(|s| s.parts.as_slice()),
+        setup
+            .as_ref()
+            .map(|s| (s.grid.lo.as_vec3(), s.grid.hi().as_vec3())),
+    )?;
+    if let Some(l) = &lighting {
+        on_event(Event::Note(describe_lighting(l, splats.len())));
+        renderer.set_lighting(gpu, &l.setup)?;
+    }
+    let mut sim = match &setup {
+        Some(s) => {
+            for w in &s.warnings {
+                log::warn!("{w}");
+            }
+            on_event(Event::Note(describe_simulation(s, p2g, opts.deterministic)));
+            Some(Simulation::new(
+                gpu,
+                &renderer,
+                s,
+                resume_from.as_ref(),
+                p2g,
+            )?)
+        }
+        None => None,
+    };
+    // Simulated objects whose normals are recomputed every frame, on the GPU.
+    let gpu_normals = match (&lighting, &setup) {
+        (Some(l), Some(s)) if !l.recompute.is_empty() => Some(GpuNormals::new(
+            gpu,
+            &renderer,
+            &l.recomputed_objects(&splats),
+            s.grid.lo.as_vec3(),
+            s.grid.hi().as_vec3(),
+        )?),
+        _ => None,
+    };
+    let settings = Settings {
+        width,
+        height,
+        fps: scene.output.fps,
+        frames: [job.frames.start, job.frames.end],
+        scene_frames: scene.frame_count(),
+        deterministic: opts.deterministic,
+        gaussians: splats.len(),
+        particles: setup.as_ref().map(|s| s.particles.len()),
+        p2g: setup.as_ref().map(|_| p2g.name().to_string()),
+        steps_per_frame: setup.as_ref().map(|s| s.steps_per_frame),
+        dt: setup.as_ref().map(|s| s.params.dt),
+        checkpoint_every: if setup.is_some() {
+            opts.checkpoint_every
+        } else {
+            0
+        },
+        resumed_from: resume_from.as_ref().map(|cp| cp.frame),
+        from_states: None,
+        export_ply: opts.export_ply.clone(),
+    };
+    let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
+    manifest.write_now()?;
+    let fragment_log = match opts.fragments {
+        true => Some(FragmentLog::create(
+            &dir.join("fragments.csv"),
+            opts.resume,
+        )?),
+        false => None,
+    };
+    let workers = FrameWriter::default_workers();
+    let mut frames = Frames {
+        job: &job,
+        gpu,
+        dir: &dir,
+        hash,
+        renderer,
+        splats: &splats,
+        lighting: lighting.as_ref(),
+        gpu_normals,
+        rotator: opts.export_ply.as_ref().map(|_| ShRotator::new()),
+        writer: FrameWriter::new(workers, 2 * workers),
+        manifest: &mut manifest,
+        fragment_log,
+        checkpoint_file: checkpoint_path(&dir),
+        rendered: 0,
+        gpu_ms: 0.0,
+    };
+    let render_start = Instant::now();
+    on_event(Event::Frames(job.frames.clone()));
+    let first_sim = resume_from.as_ref().map_or(0, |cp| cp.frame);
+    let result = match first_missing {
+        Some(_) => frames.run(sim.as_mut(), first_sim, on_event),
+        None => Ok(()),
+    };
+    let Frames {
+        writer,
+        rendered,
+        gpu_ms,
+        fragment_log,
+        ..
+    } = frames;
+    job.finish(result, writer, &mut manifest, &dir, on_event)?;
+    Ok(Summary {
+        rendered,
+        render_seconds: render_start.elapsed().as_secs_f64(),
+        total_seconds: job.started.elapsed().as_secs_f64(),
+        gpu_ms,
+        png_workers: workers,
+        manifest: manifest.path().to_path_buf(),
+        fragments: fragment_log.map(|l| l.last().to_vec()).unwrap_or_default(),
+    })
+}
+
+/// The grid's GPU size, checked before the simulation setup allocates it on the CPU.
+fn check_grid_fits(gpu: &GpuContext, scene: &scene::Scene) -> Result<()> {
+    if let Some(spec) = &scene.simulation {
+        let (lo, hi) = (DVec3::from(spec.domain.lo), DVec3::from(spec.domain.hi));
+        let cells = ((hi - lo) / spec.dx - 1e-9).ceil().max(DVec3::ONE);
+        if cells.is_finite() && cells.max_element() < f64::from(u32::MAX) {
+            limits::check_gpu(gpu, &limits::sim_needs(0, cells.as_uvec3()))?;
+        }
+    }
+    Ok(())
+}
+
+/// With `--resume`: the checkpoint to continue from, if it is not past the first frame
+/// still to render.
+fn resume_state(
+    job: &Job,
+    setup: Option<&SimulationSetup>,
+    dir: &Path,
+    hash: u64,
+    first_missing: Option<u32>,
+    on_event: &mut dyn FnMut(Event),
+) -> Result<Option<Checkpoint>> {
+    if !job.opts.resume {
+        return Ok(None);
+    }
+    let file = checkpoint_path(dir);
+    let state = match (setup, first_missing) {
+        (Some(s), Some(missing)) if file.exists() => {
+            let cp = Checkpoint::load(&file)?;
+            cp.check_matches(
+                &file,
+                hash,
+                job.opts.deterministic,
+                s.particles.len(),
+                s.steps_per_frame,
+            )?;
+            if cp.frame <= missing {
+                Some(cp)
+            } else {
+                on_event(Event::Note(format!(
+                    "resume: the checkpoint is at frame {}, after frame {missing} which is missing; simulating from frame 0",
+                    cp.frame
+                )));
+                None
+            }
+        }
+        _ => None,
+    };
+    let frames = &job.frames;
+    on_event(Event::Note(match (first_missing, &state) {
+        (None, _) => format!(
+            "resume: frames {}..{} are all written already",
+            frames.start, frames.end
+        ),
+        (Some(m), Some(cp)) => format!(
+            "resume: continuing from the checkpoint at frame {} (first missing frame {m})",
+            cp.frame
+        ),
+        (Some(m), None) => format!("resume: first missing frame {m}"),
+    }));
+    Ok(state)
+}
+
+fn describe_lighting(l: &SceneLighting, gaussians: usize) -> String {
+    format!(
+        "lighting: {} lights, shadows {}, normals of {} Gaussians in {:.2} s",
+        l.lights.at(0.0).len(),
+        l.setup.shadows.map_or("off".to_string(), |g| format!(
+            "{}×{}×{} voxels",
+            g.res.x, g.res.y, g.res.z
+        )),
+        gaussians,
+        l.normals_seconds
+    )
+}
+
+fn describe_simulation(s: &SimulationSetup, p2g: P2gPath, deterministic: bool) -> String {
+    format!(
+        "simulation: {} particles, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame, P2G {}{}",
+        s.particles.len(),
+        s.materials.len(),
+        s.grid.cells.x,
+        s.grid.cells.y,
+        s.grid.cells.z,
+        s.grid.dx,
+        s.params.dt,
+        s.steps_per_frame,
+        p2g.name(),
+        if deterministic { " (deterministic)" } else { "" }
+    )
+}
+
+/// The simulated part of a run on the GPU: the step, the derive pass into the renderer's
+/// buffer, and the kinematic objects' rigid passes.
+struct Simulation<'a> {
+    setup: &'a SimulationSetup,
+    sim: GpuSim,
+    derive: Derive,
+    /// Kinematic objects' Gaussians, moved rigidly along their paths every frame.
+    rigid: Vec<(&'a KinematicObject, RigidDerive)>,
+}
+
+impl<'a> Simulation<'a> {
+    fn new(
+        gpu: &GpuContext,
+        renderer: &GpuRenderer,
+        s: &'a SimulationSetup,
+        resume_from: Option<&Checkpoint>,
+        p2g: P2gPath,
+    ) -> Result<Self> {
+        let restored;
+        let start = match resume_from {
+            Some(cp) => {
+                restored = cp.to_particles(&s.particles);
+                &restored
+            }
+            None => &s.particles,
+        };
+        let mut sim = GpuSim::with_path(gpu, start, &s.grid, &s.materials, &s.params, p2g)?;
+        let colliders: Vec<_> = s.kinematic.iter().map(|k| k.collider.clone()).collect();
+        sim.set_kinematic(gpu, &colliders)?;
+        let derive = Derive::new(gpu, &sim, renderer, &s.splats, s.static_count as u32)?;
+        let mut rigid = Vec::new();
+        for k in &s.kinematic {
+            for part in s.parts.iter().filter(|p| p.object == k.object) {
+                let r =
+                    RigidDerive::new(gpu, renderer, &s.splats, part.start as u32, part.len as u32)?;
+                rigid.push((k, r));
+            }
+        }
+        Ok(Simulation {
+            setup: s,
+            sim,
+            derive,
+            rigid,
+        })
+    }
+
+    /// The steps that lead to `frame` (none for the first simulated frame), then the pool
+    /// fitted for the next frame; a watchdog count stops the run.
+    fn advance_to(&mut self, gpu: &GpuContext, frame: u32, first: u32) -> Result<()> {
+        let s = self.setup;
+        let w = if frame > first {
+            // The moving colliders' clock: this frame's steps start at frame − 1.
+            let start = f64::from(frame - 1) * f64::from(s.steps_per_frame) * s.params.dt;
+            match self.sim.step_frame(gpu, s.steps_per_frame, start) {
+                Ok(steps) => steps.watchdog,
+                Err(FrameError::Gpu(e)) => return Err(e.into()),
+                Err(e) => bail!("frame {frame}: {e}"),
+            }
+        } else {
+            self.sim.take_watchdog(gpu)?
+        };
+        // Sparse grid: room for the active region to double before the next read.
+        self.sim.fit_pool(gpu, &w)?;
+        if w.nonfinite > 0 || w.escaped > 0 {
+            bail!("{}", watchdog_message(frame, w, s));
+        }
+        Ok(())
+    }
+
+    /// The simulated and kinematic Gaussians of the renderer's buffer, moved to `seconds`.
+    fn derive(&self, gpu: &GpuContext, seconds: f64) -> Result<()> {
+        self.derive.run(gpu)?;
+        for (k, r) in &self.rigid {
+            let (a, b) = k.rest_to_world(seconds);
+            r.run(gpu, a, b)?;
+        }
+        Ok(())
+    }
+}
+
+/// The frame loop's state.
+struct Frames<'a> {
+    job: &'a Job,
+    gpu: &'a GpuContext,
+    dir: &'a Path,
+    hash: u64,
+    renderer: GpuRenderer,
+    splats: &'a Splats,
+    lighting: Option<&'a SceneLighting>,
+    gpu_normals: Option<GpuNormals>,
+    rotator: Option<ShRotator>,
+    writer: FrameWriter,
+    manifest: &'a mut ManifestWriter,
+    fragment_log: Option<FragmentLog>,
+    checkpoint_file: PathBuf,
+    rendered: u32,
+    gpu_ms: f64,
+}
+
+impl Frames<'_> {
+    /// Frame f shows the state after f · steps_per_frame steps, so a range that starts
+    /// later simulates the frames before it without rendering them.
+    fn run(
+        &mut self,
+        mut sim: Option<&mut Simulation>,
+        first_sim: u32,
+        on_event: &mut dyn FnMut(Event),
+    ) -> Result<()> {
+        let frames: Range<u32> = self.job.frames.clone();
+        let first = if sim.is_some() {
+            first_sim
+        } else {
+            frames.start
+        };
+        for frame in first..frames.end {
+            on_event(Event::FrameStart(frame));
+            let t0 = Instant::now();
+            let mut timing = FrameTiming::default();
+            if let Some(sim) = sim.as_deref_mut() {
+                sim.advance_to(self.gpu, frame, first_sim)?;
+                if self.job.opts.checkpoint_every > 0
+                    && frame > first_sim
+                    && frame % self.job.opts.checkpoint_every == 0
+                {
+                    self.checkpoint(sim, frame)?;
+                }
+                timing.simulate_ms = t0.elapsed().as_secs_f64() * 1e3;
+                if frame < frames.start {
+                    continue;
+                }
+            }
+            if self.job.opts.resume && self.job.frame_done(self.dir, frame) {
+                on_event(Event::FrameDone {
+                    frame,
+                    skipped: true,
+                });
+                continue;
+            }
+            if let Some(sim) = sim.as_deref_mut() {
+                if let Some(log) = &mut self.fragment_log {
+                    let state = sim.sim.read_particles(self.gpu, &sim.setup.particles)?;
+                    log.record(frame, &state, sim.setup, &self.job.scene)?;
+                }
+                sim.derive(
+                    self.gpu,
+                    f64::from(frame) / f64::from(self.job.scene.output.fps),
+                )?;
+            }
+            self.render(frame, timing)?;
+            on_event(Event::FrameDone {
+                frame,
+                skipped: false,
+            });
+        }
+        Ok(())
+    }
+
+    /// Frames before this one reach the disk first, so a crash after the checkpoint never
+    /// loses a frame that resuming from it would skip.
+    fn checkpoint(&mut self, sim: &Simulation, frame: u32) -> Result<()> {
+        self.writer.flush()?;
+        let s = sim.setup;
+        let state = sim.sim.read_particles(self.gpu, &s.particles)?;
+        Checkpoint::from_particles(
+            &state,
+            self.hash,
+            self.job.opts.deterministic,
+            frame,
+            s.steps_per_frame,
+        )
+        .save(&self.checkpoint_file)?;
+        self.manifest.write_now()?;
+        Ok(())
+    }
+
+    /// Export, relight, render and queue the PNG of the Gaussians now in the renderer.
+    fn render(&mut self, frame: u32, mut timing: FrameTiming) -> Result<()> {
+        let gpu = self.gpu;
+        let scene = &self.job.scene;
+        let t1 = Instant::now();
+        if let (Some(dir), Some(rotator)) = (&self.job.opts.export_ply, &self.rotator) {
+            let gaussians = self.renderer.read_gaussians(gpu)?;
+            crate::output::export::export_frame(dir, frame, &gaussians, self.splats, rotator)?;
+        }
+        if let Some(l) = self.lighting {
+            self.renderer
+                .set_lights(&l.lights.at(frame as f32 / scene.output.fps));
+        }
+        if let Some(n) = &self.gpu_normals {
+            // Normals in the deformed configuration (new fracture faces included).
+            n.run(gpu)?;
+        }
+        let camera = self.job.path.camera(frame);
+        let background = Vec3::from(scene.output.background);
+        let (image, timings) = self.renderer.render_timed(gpu, &camera, background)?;
+        self.gpu_ms += timings.render_ms + timings.readback_ms;
+        self.writer.submit(
+            frame_path(self.dir, frame),
+            image.width,
+            image.height,
+            image.rgba,
+        )?;
+        timing.render_ms = t1.elapsed().as_secs_f64() * 1e3;
+        timing.gpu_ms = timings.render_ms + timings.readback_ms;
+        self.manifest.frame_done(frame, timing)?;
+        self.rendered += 1;
+        Ok(())
+    }
+}
+
+/// The watchdog's stop message: frame, what was counted, the likely cause. Frames
+/// already written are complete (each was renamed into place).
+fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
+    let n = s.steps_per_frame;
+    let steps = match w.first_step {
+        // Frame f shows the state after f·n steps: the batch read before it ran steps
+        // (f − 1)·n + 1 ..= f·n, counted from 1.
+        Some(k) => format!(
+            "in the {n} steps before frame {frame}, first at step {} (substep {} of {n})",
+            u64::from(frame.saturating_sub(1)) * u64::from(n) + u64::from(k) + 1,
+            k + 1
+        ),
+        None => format!("in the {n} steps before frame {frame}"),
+    };
+    if w.nonfinite > 0 {
+        format!(
+            "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}); likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
+            w.nonfinite, s.params.dt, s.grid.dx
+        )
+    } else {
+        let (lo, hi) = (s.grid.lo, s.grid.hi());
+        let v = |x: DVec3| format!("[{:.3}, {:.3}, {:.3}]", x.x, x.y, x.z);
+        format!(
+            "simulation stopped: {} particle-steps left the domain {steps} ({} .. {}); likely cause: simulation.domain too small for the motion, or Δt too large",
+            w.escaped,
+            v(lo),
+            v(hi)
+        )
+    }
+}
