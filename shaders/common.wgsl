@@ -65,7 +65,7 @@ struct Stats {
 
 const TILE: u32 = 16u;
 
-// Compositing skips α below this (SPEC §7).
+// Compositing skips α below this (docs/method.md §7).
 const MIN_ALPHA: f32 = 1.0 / 255.0;
 
 // Flattened workgroup index of a 1D dispatch split over x and y (x ≤ 65535).
@@ -73,7 +73,7 @@ fn flat_workgroup(wid: vec3<u32>, nwg: vec3<u32>) -> u32 {
     return wid.x + wid.y * nwg.x;
 }
 
-// How many standard deviations a Gaussian's footprint spans: 3 (SPEC §7), or fewer when
+// How many standard deviations a Gaussian's footprint spans: 3 (docs/method.md §7), or fewer when
 // its α = ω·exp(−r²/2) already falls below MIN_ALPHA inside 3σ, at r = sqrt(2 ln(255 ω)).
 // Beyond that compositing skips every pixel, so the image does not change while faint
 // Gaussians touch fewer tiles. Mirrors `render::cpu::extent_sigmas`.

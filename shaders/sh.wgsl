@@ -1,4 +1,4 @@
-// Real spherical harmonics of the 3DGS reference (SPEC §7). Mirrors src/splat/sh.rs.
+// Real spherical harmonics of the 3DGS reference (docs/method.md §7). Mirrors src/splat/sh.rs.
 // Coefficients are stored as f16 pairs: per Gaussian 24 u32 = 48 halves, coefficient-major
 // (k * 3 + c), padded with zeros up to degree 3.
 

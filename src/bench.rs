@@ -192,7 +192,7 @@ struct LitTimes {
     normals_ms: f64,
 }
 
-/// The same synthetic scene relit (issue 4): PCA normals on the CPU, two point lights and
+/// The same synthetic scene relit: PCA normals on the CPU, two point lights and
 /// a shadow volume; median render time over `repeat` frames, then one frame pass by pass
 /// for the cost of the shadow and shade passes.
 fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Result<LitTimes> {

@@ -1,7 +1,7 @@
 //! splatter: a headless simulator and renderer for 3D Gaussian Splatting scenes.
 //!
 //! The pipeline (see `docs/architecture.md`): **build** (scene file → Gaussians, CPU) →
-//! **simulate** (MPM, GPU; later issues) → **derive** (deformed Gaussians) → **render**
+//! **simulate** (MPM, GPU) → **derive** (deformed Gaussians) → **render**
 //! (tile-based splatting, GPU) → PNG frames (writer thread).
 
 pub mod bench;

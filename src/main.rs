@@ -71,7 +71,7 @@ enum BenchWhat {
         per_pass: bool,
     },
     /// The sim, render and end-to-end benchmarks in one run: seconds per frame of each
-    /// paper example under scenes/ next to the paper's column (SPEC §9), written to
+    /// paper example under scenes/ next to the paper's column (docs/method.md §9), written to
     /// OUT/data/bench_suite.{json,md} (docs/performance.md).
     Suite(Box<SuiteArgs>),
     /// Convergence study and stability atlas on the CPU reference step: JSON and tables

@@ -1,4 +1,4 @@
-//! Selecting what moves and interior filling (issue 5, items 1–2): `physics.select`,
+//! Selecting what moves and interior filling: `physics.select`,
 //! `physics.min_opacity`, `physics.fill` and `scene::fill`.
 
 use std::path::Path;

@@ -1,4 +1,4 @@
-//! Long runs that survive (issue 7), end to end through the binary: a run killed midway
+//! Long runs that survive, end to end through the binary: a run killed midway
 //! and resumed from its checkpoint gives the frames of an uninterrupted run (byte-identical
 //! in deterministic mode); deterministic runs of a fracture scene are byte-identical; the
 //! run manifest; checkpoints of another scene or mode refused; buffer limits checked before

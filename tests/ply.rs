@@ -1,4 +1,4 @@
-//! PLY reading and writing (SPEC §5): round trips, layout conversion, robustness.
+//! PLY reading and writing (docs/method.md §5): round trips, layout conversion, robustness.
 
 use std::time::Instant;
 

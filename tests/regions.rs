@@ -1,4 +1,4 @@
-//! Material regions (issue 5, item "the paper's scenes"): `physics.regions` selects
+//! Material regions: `physics.regions` selects
 //! particles by shell depth, box, sphere or label and gives them their own material and
 //! fill colour; the first match wins, the rest keep the object's material.
 

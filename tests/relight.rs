@@ -1,4 +1,4 @@
-//! Relighting (issue 4): PCA normals against analytic normals, the shaded sphere against
+//! Relighting: PCA normals against analytic normals, the shaded sphere against
 //! the Blinn-Phong formula, and shadows against the geometry that casts them. Normals and
 //! shading formulas are checked on the CPU (`splatter::relight`); the rendered images come
 //! from the GPU renderer on every test adapter.
@@ -31,7 +31,7 @@ fn percentile(v: &mut [f32], q: f32) -> f32 {
 
 /// Surface Gaussians (within half a spacing of the surface) of a filled, jittered sphere and
 /// box: PCA normals (k = 30) against the analytic outward normals — median < 5°, 95th
-/// percentile < 20° (issue 4). On the box, Gaussians within two spacings of an edge, where
+/// percentile < 20°. On the box, Gaussians within two spacings of an edge, where
 /// the analytic normal is not defined, are left out.
 #[test]
 fn pca_normals_match_analytic_normals_on_a_sphere_and_a_box() {
@@ -402,7 +402,7 @@ fn ray_plane(cam: &Camera, x: u32, y: u32) -> Option<Vec3> {
 /// A cube of Gaussians split in two by the simulation: its halves are thrown apart at
 /// ±1 m/s and it breaks along a weak layer (five lattice layers of cohesionless NACC, wider
 /// than an MPM stencil, between stiff elastic halves). On the two new faces, normals recomputed by PCA in the deformed
-/// configuration are within 20° of the face normal (median, issue 4), while the normals
+/// configuration are within 20° of the face normal (median), while the normals
 /// transported with F⁻ᵀ from the interior are not — the measurement behind
 /// `lighting.simulated_normals = "recompute"`.
 #[test]

@@ -163,7 +163,7 @@ fn isotropic_gaussian_has_the_analytic_profile() {
 }
 
 /// Degree 1, only the z-basis coefficient of red set: seen along a view direction d the red
-/// channel is 0.5 + C1 · d_z · c (SPEC §7), while green, with only a DC term, stays 0.5.
+/// channel is 0.5 + C1 · d_z · c (docs/method.md §7), while green, with only a DC term, stays 0.5.
 /// Red / green × 0.5 removes the Gaussian's α from the comparison.
 #[test]
 fn degree_one_colour_follows_the_view_direction() {

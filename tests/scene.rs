@@ -322,7 +322,7 @@ fn default_scene_parses_and_validates() {
     );
     assert_eq!(s.output_dir(), Path::new("out/default"));
     assert!(s.objects.len() >= 4);
-    // A dynamic scene under moving lights (issue 5): something breaks, something wobbles.
+    // A dynamic scene under moving lights: something breaks, something wobbles.
     assert!(s.simulation.is_some() && s.lighting.is_some());
     assert_eq!(s.objects.iter().filter(|o| o.physics.is_some()).count(), 2);
     let path = s.camera_path().unwrap();

@@ -1,5 +1,4 @@
-//! Analytic tests of the CPU reference MPM step (`splatter::sim::cpu`, SPEC §2; issue 3's
-//! acceptance bullet "Analytic tests"). Each test states its tolerance and prints what it
+//! Analytic tests of the CPU reference MPM step (`splatter::sim::cpu`, docs/method.md §2). Each test states its tolerance and prints what it
 //! measured (`cargo test --release --test sim_cpu -- --nocapture`).
 
 use glam::{DMat3, DVec3};

@@ -1,4 +1,4 @@
-//! Deforming the Gaussians on the GPU (SPEC §6): the derive pass against its f64 twin, and a
+//! Deforming the Gaussians on the GPU (docs/method.md §6): the derive pass against its f64 twin, and a
 //! jelly cube simulated, derived and rendered without a CPU round trip, checked against the
 //! CPU reference renderer fed with the CPU-derived Gaussians.
 

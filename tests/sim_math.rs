@@ -1,5 +1,5 @@
-//! Single-point tests of the NACC return mapping (SPEC §4, issue 3 acceptance "NACC
-//! single-point tests"), on the f64 oracle in `splatter::sim`. Each test prints the numbers
+//! Single-point tests of the NACC return mapping (docs/method.md §4), on the
+//! f64 oracle in `splatter::sim`. Each test prints the numbers
 //! it measured (`cargo test --release --test sim_math -- --nocapture`).
 
 use glam::{DMat3, DQuat, DVec3};
@@ -24,7 +24,7 @@ fn random_trial(r: &mut SplitMix64) -> DMat3 {
     random_rotation(r) * DMat3::from_diagonal(s) * random_rotation(r).transpose()
 }
 
-/// (p, q) of an elastic gradient, evaluated from scratch (SVD, σ clamp, SPEC §4 formulas).
+/// (p, q) of an elastic gradient, evaluated from scratch (SVD, σ clamp, docs/method.md §4 formulas).
 fn evaluate_pq(f: DMat3, params: &NaccParams) -> (f64, f64) {
     let sigma = svd3(f).sigma.max(DVec3::splat(SIGMA_MIN));
     let st = principal_state(sigma, params.kappa(), params.mu());
@@ -69,7 +69,7 @@ fn elastic_trial_states_are_unchanged() {
 /// (b) + (h) Every plastic return lands on the yield surface of p0(α_start), for all
 /// variants: the returned (p, q) to round-off, and the reconstructed F_new re-evaluated from
 /// scratch (h) to ~ε κ (p = κ/2 (1 − J²) cannot be better: with α ≥ 0, p0 = 1e-5 κ). Also: α_new − α = ln(J_tr / det F_new), p_new ∈ [−βp0, p0], 0 ≤ q_new ≤ q_tr.
-/// For contrast it measures the drift of the reference code's trace-keeping b̄ (SPEC §4).
+/// For contrast it measures the drift of the reference code's trace-keeping b̄ (docs/method.md §4).
 #[test]
 fn plastic_returns_land_on_the_yield_surface() {
     let mut r = SplitMix64::new(32);
@@ -399,7 +399,7 @@ fn continuity_across_the_tips() {
     }
 }
 
-/// k → ∞ recovers `center` (SPEC §4).
+/// k → ∞ recovers `center` (docs/method.md §4).
 #[test]
 fn continuous_with_huge_k_is_center() {
     let ell = fruit().ellipse(-0.2);

@@ -1,4 +1,4 @@
-//! The sparse grid (issue 6): the GPU grid is a pool of 4³-node blocks covering only the
+//! The sparse grid: the GPU grid is a pool of 4³-node blocks covering only the
 //! active region, addressed through a block → slot table. The same steps with a pool as
 //! large as the whole domain (the dense grid's memory) give bit-identical positions on the
 //! deterministic gather path, and a pool too small is reported by the watchdog and grown.

@@ -1,4 +1,4 @@
-//! "Math twice" (issue 3, item 4): the f32 WGSL modules under `shaders/sim/` against the f64
+//! "Math twice": the f32 WGSL modules under `shaders/sim/` against the f64
 //! oracle in `splatter::sim`, on thousands of random inputs per function, on the best
 //! adapter and on the GL backend (lavapipe and llvmpipe on a machine without a GPU).
 //!

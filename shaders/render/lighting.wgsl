@@ -1,4 +1,4 @@
-// Shared declarations of the relighting passes (SPEC §8, docs/relighting.md). Mirrored by
+// Shared declarations of the relighting passes (docs/method.md §8, docs/relighting.md). Mirrored by
 // `#[repr(C)]` types in src/render/gpu/lighting.rs (checked by a layout test). Concatenated
 // after shaders/common.wgsl.
 

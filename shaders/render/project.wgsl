@@ -1,4 +1,4 @@
-// Pass 1 of the renderer: project every Gaussian (SPEC §7).
+// Pass 1 of the renderer: project every Gaussian (docs/method.md §7).
 // Per Gaussian: view-space mean, 2D covariance Σ' = J W Σ Wᵀ Jᵀ + 0.3 I, its inverse (the
 // conic), the screen radius from 3 standard deviations (less for faint Gaussians, see
 // `extent_sigmas`), the rectangle of 16×16 tiles it

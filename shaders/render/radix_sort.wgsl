@@ -1,4 +1,4 @@
-// Stable LSD radix sort of (key, value) u32 pairs, 4 bits per pass (SPEC §7: "GPU sort").
+// Stable LSD radix sort of (key, value) u32 pairs, 4 bits per pass (docs/method.md §7: "GPU sort").
 // One pass = `count_digits` (a 16-bin histogram per block of 2048 keys), an exclusive scan
 // of the histograms laid out digit-major (counts[digit * num_blocks + block]), then
 // `scatter`, which ranks keys inside the block with a workgroup scan of digit counts

@@ -1,7 +1,7 @@
 // Last pass of the renderer: one workgroup per 16×16 tile, one thread per pixel. The tile's
 // Gaussians (front to back) are loaded into workgroup memory 256 at a time and composited
 // with α = min(0.99, ω · exp(−½ Δᵀ Σ'⁻¹ Δ)), skipping α < 1/255 and stopping once the
-// transmittance would fall below 1e-4 (SPEC §7). Pixel (i, j) is sampled at (i + 0.5, j + 0.5).
+// transmittance would fall below 1e-4 (docs/method.md §7). Pixel (i, j) is sampled at (i + 0.5, j + 0.5).
 // Mirrors `render::cpu::render`.
 
 @group(0) @binding(0) var<uniform> frame: Frame;

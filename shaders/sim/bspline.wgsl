@@ -1,4 +1,4 @@
-// Quadratic B-spline weights of MPM (SPEC §2) in f32: the WGSL twin of src/sim/bspline.rs.
+// Quadratic B-spline weights of MPM (docs/method.md §2) in f32: the WGSL twin of src/sim/bspline.rs.
 //
 // For a particle at x and grid spacing Δx (passed as inv_dx = 1/Δx and dx):
 // base = floor(x/Δx − 0.5), fx = x/Δx − base (each component in [0.5, 1.5), up to one ulp
@@ -8,7 +8,7 @@
 //   w2 = ½ (f − 0.5)²    dw2/df = f − 0.5
 // Node base + off, off ∈ {0,1,2}³, gets w = w[off.x].x · w[off.y].y · w[off.z].z;
 // d_ip = i·Δx − x_p = (off − fx)·Δx (from fx, so it does not depend on the size of x);
-// ∇w = (dw_a w_b w_c, w_a dw_b w_c, w_a w_b dw_c) / Δx. The MLS factor 4/Δx² of SPEC §2 is
+// ∇w = (dw_a w_b w_c, w_a dw_b w_c, w_a w_b dw_c) / Δx. The MLS factor 4/Δx² of docs/method.md §2 is
 // D_p⁻¹ (Σ w d dᵀ = Δx²/4 I).
 //
 // f32 note: x/Δx carries an absolute error of ~ε·|x|/Δx, so fx and the weights do too

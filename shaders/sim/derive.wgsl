@@ -1,4 +1,4 @@
-// Derive (per particle, SPEC §6): the deformed Gaussian of a simulated particle, written
+// Derive (per particle, docs/method.md §6): the deformed Gaussian of a simulated particle, written
 // straight into the renderer's Gaussian buffer: mean x_p, covariance F A Fᵀ (A the rest
 // covariance in world space), and the rest-frame rotation composed with the rotation of
 // F's polar decomposition (SH are then evaluated along that frame). Opacity and SH are

@@ -1,4 +1,4 @@
-// Non-Associated Cam-Clay return mapping of CD-MPM (SPEC §4) on top of the Borden
+// Non-Associated Cam-Clay return mapping of CD-MPM (docs/method.md §4) on top of the Borden
 // Neo-Hookean elasticity, in f32: the WGSL twin of src/sim/nacc.rs (same constants, same
 // case table, same three case-3 variants, same det b̄ = 1 choice, same hardening, same σ
 // clamp). Two f32-specific forms, same results in exact arithmetic: the det b̄ = 1 root is
@@ -105,7 +105,7 @@ fn nacc_p0(alpha: f32, mat: NaccMaterial) -> f32 {
     return mat.kappa * (NACC_EPS0 + sim_sinh(arg));
 }
 
-// y(p, q) / a², a = (1 + β) p0 / 2: the sign of SPEC §4's yield function (> 0 outside),
+// y(p, q) / a², a = (1 + β) p0 / 2: the sign of docs/method.md §4's yield function (> 0 outside),
 // evaluated in the same factored form, scaled so that it cannot overflow.
 fn nacc_yield_scaled(p: f32, q: f32, p0: f32, mat: NaccMaterial) -> f32 {
     let inv_a = 2.0 / ((1.0 + mat.beta) * p0);
@@ -204,7 +204,7 @@ fn nacc_project_closest_point(p_tr: f32, q_tr: f32, p0: f32, mat: NaccMaterial) 
     return vec2<f32>(pc + su * x0 * a, sq * x1 * a);
 }
 
-// The return mapping R: (p_tr, q_tr) → (p_new, q_new) of SPEC §4's table, for cohesion p0
+// The return mapping R: (p_tr, q_tr) → (p_new, q_new) of docs/method.md §4's table, for cohesion p0
 // (from the α at the start of the step).
 fn nacc_project_pq(p_tr: f32, q_tr: f32, p0: f32, mat: NaccMaterial) -> NaccPq {
     if nacc_yield_scaled(p_tr, q_tr, p0, mat) <= 0.0 {
@@ -240,7 +240,7 @@ fn nacc_j_from_pressure(p: f32, kappa: f32) -> f32 {
     return sqrt(max(1.0 - 2.0 * p / kappa, NACC_JE_RADICAND_MIN));
 }
 
-// The returned b̄: b̄_new = ratio·dev(b̄_tr) + c (1,1,1) with det b̄_new = 1 (SPEC §4's
+// The returned b̄: b̄_new = ratio·dev(b̄_tr) + c (1,1,1) with det b̄_new = 1 (docs/method.md §4's
 // s_new/μ + c (1,1,1), s_new = ratio·s_tr; `nacc::solve_b_bar`, same root). Solved as
 // b̄_new,i = ratio·b̄_tr,i + c′, c′ = c − ratio·mean(b̄_tr): since det b̄_tr = 1,
 // g(c′) = Π(ratio b̄_tr,i + c′) − 1 has g(0) = ratio³ − 1 ≤ 0 and, by the weighted AM-GM

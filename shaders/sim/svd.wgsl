@@ -1,4 +1,4 @@
-// 3×3 singular value decomposition and polar decomposition in f32 (SPEC §3, §4, §6): the
+// 3×3 singular value decomposition and polar decomposition in f32 (docs/method.md §3, §4, §6): the
 // WGSL twin of src/sim/svd.rs, same convention and same algorithm, f32 tolerances.
 // Needs math.wgsl.
 //

@@ -87,7 +87,7 @@ fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     // Indirect dispatch arguments are written only by our own kernels, which keep them
     // within the portable limits (the simulation's compact_blocks.wgsl), so wgpu's
     // validation of them — an extra compute dispatch and barrier per indirect dispatch,
-    // about 2 ms each on lavapipe — is switched off.
+    // costly on CPU drivers — is switched off.
     desc.flags =
         wgpu::InstanceFlags::default().with_env() - wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL;
     wgpu::Instance::new(desc)

@@ -1,4 +1,4 @@
-//! Relighting (SPEC §8): per-Gaussian normals and Blinn-Phong shading under moving point
+//! Relighting (docs/method.md §8): per-Gaussian normals and Blinn-Phong shading under moving point
 //! lights with shadows. The method and its choices are in `docs/relighting.md`.
 //!
 //! This module holds the CPU side: the shading model ([`blinn_phong`], the twin of
@@ -43,7 +43,7 @@ pub struct PointLight {
 /// The most point lights a frame may have (`MAX_LIGHTS` in `shaders/render/lighting.wgsl`).
 pub const MAX_LIGHTS: usize = 8;
 
-/// Blinn-Phong of one Gaussian (SPEC §8, the paper's eq. A20) with per-object weights:
+/// Blinn-Phong of one Gaussian (docs/method.md §8, the paper's eq. A20) with per-object weights:
 ///
 ///   L = k_a c0 ⊙ I_a + Σ_m T_m (c0 ⊙ I_L,m) (k_d D_m + k_s S_m) / r_m²,
 ///   D_m = max(n·l_m, 0),  S_m = max(n·h_m, 0)^shininess,  h_m = normalize(l_m + v),
@@ -51,7 +51,7 @@ pub const MAX_LIGHTS: usize = 8;
 /// with c0 the Gaussian's own colour, p its centre, n its unit normal, v the unit direction
 /// from p to the eye, l_m the unit direction from p to light m at distance r_m, T_m ∈ [0, 1]
 /// the light's visibility from p (`visibility[m]`, 1 when shorter than `lights`).
-#[allow(clippy::too_many_arguments)] // the formula's own inputs, named as in SPEC §8
+#[allow(clippy::too_many_arguments)] // the formula's own inputs, named as in docs/method.md §8
 pub fn blinn_phong(
     c0: Vec3,
     p: Vec3,

@@ -1,4 +1,4 @@
-//! Per-Gaussian normals by PCA of the neighbouring centres (SPEC §8): the eigenvector of the
+//! Per-Gaussian normals by PCA of the neighbouring centres (docs/method.md §8): the eigenvector of the
 //! smallest eigenvalue of the covariance of the k nearest centres (k = 30 by default, as in
 //! the paper's public code), oriented outward.
 //!

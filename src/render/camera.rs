@@ -1,4 +1,4 @@
-//! The pinhole camera every renderer in splatter uses (SPEC §7).
+//! The pinhole camera every renderer in splatter uses (docs/method.md §7).
 //!
 //! Conventions (the INRIA 3DGS / OpenCV ones):
 //! - camera axes: x right, y down, z forward (the camera looks along +z);

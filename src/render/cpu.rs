@@ -29,7 +29,7 @@ pub struct ProjectedGaussian {
 /// Compositing skips α below this.
 pub const MIN_ALPHA: f32 = 1.0 / 255.0;
 
-/// Standard deviations the screen radius spans: 3 (SPEC §7), or the distance at which
+/// Standard deviations the screen radius spans: 3 (docs/method.md §7), or the distance at which
 /// α = ω·exp(−r²/2) drops below 1/255 when that is nearer, r = sqrt(2 ln(255 ω)). The
 /// tiles this leaves out hold only pixels that compositing skips, so images are unchanged.
 pub fn extent_sigmas(opacity: f32) -> f32 {
@@ -74,7 +74,7 @@ pub fn ellipse_touches_tile(xy: Vec2, conic: Vec3, k2: f32, tx: u32, ty: u32) ->
     m <= k2
 }
 
-/// Project Gaussian `i` (SPEC §7); `None` when culled or degenerate.
+/// Project Gaussian `i` (docs/method.md §7); `None` when culled or degenerate.
 pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<ProjectedGaussian> {
     let mean = splats.means[i];
     let opacity = splats.opacities[i];
@@ -169,7 +169,7 @@ pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
     out
 }
 
-/// Front-to-back compositing of one pixel (SPEC §7).
+/// Front-to-back compositing of one pixel (docs/method.md §7).
 pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3) -> Vec3 {
     let (tx, ty) = (x / TILE, y / TILE);
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);

@@ -2,7 +2,7 @@
 //! rotation of their rest frame (used to evaluate view-dependent SH colour).
 //!
 //! Static objects get their covariance from the object transform M (Σ = M A Mᵀ) and the
-//! rotation of M's polar decomposition; simulated ones (later) from F (SPEC §6).
+//! rotation of M's polar decomposition; simulated ones (later) from F (docs/method.md §6).
 
 use glam::{Mat3, Quat, Vec3};
 

@@ -1,4 +1,4 @@
-//! Interior filling (SPEC §5): particles inside a simulated object, so that a surface-only
+//! Interior filling (docs/method.md §5): particles inside a simulated object, so that a surface-only
 //! capture breaks like a solid and a coarse procedural lattice gets the simulation's
 //! resolution.
 //!

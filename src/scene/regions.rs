@@ -1,4 +1,4 @@
-//! Material regions of a simulated object (`physics.regions`, SPEC §5): the watermelon's
+//! Material regions of a simulated object (`physics.regions`, docs/method.md §5): the watermelon's
 //! rind, flesh and seeds are one object with three materials. Each region selects particles
 //! by depth below the surface (`shell`), by a world box or ball (`box`, `sphere`, as
 //! `physics.select`) or by the Gaussians' label (`label`), and gives them its own material

@@ -1,6 +1,6 @@
 //! The scene file's simulation: the `simulation` block (grid, step, gravity, boundaries) and
 //! each object's `physics` (material, initial velocity), turned into what the MPM step
-//! needs (SPEC §1–§4). The selected Gaussians of a simulated object (`physics.select`,
+//! needs (docs/method.md §1–§4). The selected Gaussians of a simulated object (`physics.select`,
 //! `physics.min_opacity`; default all) are particles, the rest of it stays static; with
 //! `physics.fill` its interior gets particles too (`scene::fill`).
 
@@ -230,7 +230,7 @@ impl FillSpec {
     }
 }
 
-/// A material (SPEC §3–§4, parameters as in the paper's table).
+/// A material (docs/method.md §3–§4, parameters as in the paper's table).
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
 #[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MaterialSpec {

@@ -1,4 +1,4 @@
-//! Quadratic B-spline interpolation weights (SPEC §2).
+//! Quadratic B-spline interpolation weights (docs/method.md §2).
 //!
 //! For a particle at `x` and grid spacing Δx: `base = floor(x/Δx − 0.5)`, `fx = x/Δx − base`
 //! (each component in [0.5, 1.5)), and per axis
@@ -12,7 +12,7 @@
 //! Node `base + (a, b, c)`, a, b, c ∈ {0, 1, 2}, gets `w = w_a(x) · w_b(y) · w_c(z)`;
 //! `d_ip = i·Δx − x_p` is the node's offset from the particle. The gradient with respect to
 //! the particle position is `∇w = (dw_a w_b w_c, w_a dw_b w_c, w_a w_b dw_c) / Δx`.
-//! The MLS-MPM factor `4/Δx²` of SPEC §2 is the inverse of `D_p = Σ w d dᵀ = (Δx²/4) I`,
+//! The MLS-MPM factor `4/Δx²` of docs/method.md §2 is the inverse of `D_p = Σ w d dᵀ = (Δx²/4) I`,
 //! which the tests check.
 
 use glam::{DVec3, IVec3};
@@ -30,7 +30,7 @@ pub struct Stencil {
     pub dw: [DVec3; 3],
 }
 
-/// Per-axis quadratic B-spline weights for a fractional position `f` ∈ [0.5, 1.5) (SPEC §2).
+/// Per-axis quadratic B-spline weights for a fractional position `f` ∈ [0.5, 1.5) (docs/method.md §2).
 pub fn axis_weights(f: f64) -> [f64; 3] {
     [
         0.5 * (1.5 - f) * (1.5 - f),
@@ -89,7 +89,7 @@ impl Stencil {
         ) / dx
     }
 
-    /// Offset `d_ip = i·Δx − x_p` of node `base + off` from the particle (SPEC §2).
+    /// Offset `d_ip = i·Δx − x_p` of node `base + off` from the particle (docs/method.md §2).
     /// Computed from `fx` so that it does not depend on the magnitude of `x`.
     pub fn offset(&self, off: IVec3, dx: f64) -> DVec3 {
         (off.as_dvec3() - self.fx) * dx

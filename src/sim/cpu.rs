@@ -1,7 +1,7 @@
-//! The CPU reference MPM step (SPEC §2), f64 and rayon-parallel: the oracle the f32 GPU
+//! The CPU reference MPM step (docs/method.md §2), f64 and rayon-parallel: the oracle the f32 GPU
 //! step is compared with, and the home of the analytic tests (`tests/sim_cpu.rs`).
 //!
-//! One [`step`] is SPEC §2 verbatim: **P2G** ([`p2g`], MLS-MPM/APIC with quadratic
+//! One [`step`] is docs/method.md §2 verbatim: **P2G** ([`p2g`], MLS-MPM/APIC with quadratic
 //! B-splines, affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ_p), **grid update** ([`grid_update`]:
 //! v = p/m, gravity, boundary conditions) and **G2P** ([`g2p`]: v_p, C_p, F ← (I + Δt C) F,
 //! x += Δt v, then the material's plasticity: [`return_map`] for NACC, nothing for the
@@ -25,7 +25,7 @@
 //! for any number of threads (tested), and the scheme is the atomics-free P2G the GL path
 //! of the GPU step can copy.
 //!
-//! # Boundary conditions (SPEC §2), applied to grid velocities after gravity
+//! # Boundary conditions (docs/method.md §2), applied to grid velocities after gravity
 //!
 //! A condition acts on a node with the unit normal n pointing *out of the obstacle* into
 //! the free region; v_n = v·n (< 0: moving into the obstacle), v_t = v − v_n n:
@@ -38,7 +38,7 @@
 //! - Coulomb friction μ (slip and separate): only under compression (v_n < 0, i.e. when the
 //!   surface had to push): the tangential speed drops by μ |v_n| and is clamped at 0,
 //!   direction kept: v_t ← v_t max(0, 1 − μ|v_n| / |v_t|). Nothing ever writes v = 0 for
-//!   slip or separate unless friction stops the node, which is the point of SPEC §2's
+//!   slip or separate unless friction stops the node, which is the point of docs/method.md §2's
 //!   warning. The impulse a node's normal velocity change stands for is m|v_n|, so the
 //!   friction impulse m μ |v_n| is the Coulomb bound μ·(normal impulse) per node and step.
 //!
@@ -75,7 +75,7 @@ use super::nacc::{return_map, Case3Variant, NaccParams};
 /// face's wall condition (see the module docs for why 3).
 pub const WALL_BAND: u32 = 3;
 
-/// A material: an elastic model, or NACC plasticity on top of Neo-Hookean (SPEC §3–§4).
+/// A material: an elastic model, or NACC plasticity on top of Neo-Hookean (docs/method.md §3–§4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
     /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I; no plasticity.
@@ -126,7 +126,7 @@ impl Material {
         }
     }
 
-    /// Kirchhoff stress τ(F) (SPEC §3).
+    /// Kirchhoff stress τ(F) (docs/method.md §3).
     pub fn kirchhoff(&self, f: DMat3) -> DMat3 {
         match self {
             Material::FixedCorotated { lame } => kirchhoff(ElasticModel::FixedCorotated, f, lame),
@@ -136,7 +136,7 @@ impl Material {
     }
 
     /// The plastic step after the F update: (F, α) unchanged for the elastic models, the
-    /// NACC return mapping (SPEC §4) otherwise.
+    /// NACC return mapping (docs/method.md §4) otherwise.
     pub fn plasticity(&self, f_trial: DMat3, alpha: f64) -> (DMat3, f64) {
         match self {
             Material::Nacc { params, variant } => {
@@ -148,12 +148,12 @@ impl Material {
     }
 }
 
-/// Δt = CFL · Δx / c with c = sqrt((λ + 2μ)/ρ) (SPEC §2; CFL ≈ 0.3–0.6).
+/// Δt = CFL · Δx / c with c = sqrt((λ + 2μ)/ρ) (docs/method.md §2; CFL ≈ 0.3–0.6).
 pub fn cfl_dt(material: &Material, density: f64, dx: f64, cfl: f64) -> f64 {
     cfl * dx / (material.p_wave_modulus() / density).sqrt()
 }
 
-/// Particles as a structure of arrays (SPEC §1, the simulated part).
+/// Particles as a structure of arrays (docs/method.md §1, the simulated part).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Particles {
     /// Positions x_p.
@@ -427,7 +427,7 @@ pub struct Boundaries {
 /// Particle-to-grid transfer of the affine field.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Transfer {
-    /// APIC/MLS (SPEC §2's default): m_p C_p is transferred.
+    /// APIC/MLS (docs/method.md §2's default): m_p C_p is transferred.
     #[default]
     Apic,
     /// PIC: C_p still drives the F update but is not transferred (for comparison only).
@@ -579,7 +579,7 @@ struct P2gItem {
     affine: DMat3,
 }
 
-/// P2G (SPEC §2 step 1) into `grid.mass` and `grid.momentum`, by the sorted gather of the
+/// P2G (docs/method.md §2 step 1) into `grid.mass` and `grid.momentum`, by the sorted gather of the
 /// module docs. Returns how many particles were left out (stencil off the grid).
 pub fn p2g(
     particles: &Particles,
@@ -705,7 +705,7 @@ pub fn p2g(
     escaped
 }
 
-/// Grid update (SPEC §2 step 2): v_i = p_i/m_i where m_i > 0 (0 elsewhere), v_i += Δt g,
+/// Grid update (docs/method.md §2 step 2): v_i = p_i/m_i where m_i > 0 (0 elsewhere), v_i += Δt g,
 /// then the colliders and the domain walls (module docs).
 pub fn grid_update(grid: &mut Grid, dt: f64, gravity: DVec3, boundaries: &Boundaries) {
     grid_update_at(grid, dt, gravity, boundaries, &[], 0.0);
@@ -772,7 +772,7 @@ pub fn grid_update_at(
         });
 }
 
-/// G2P (SPEC §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ, F ← (I + Δt C) F,
+/// G2P (docs/method.md §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ, F ← (I + Δt C) F,
 /// x += Δt v_p, then the material's plasticity. A particle whose stencil is off the grid
 /// moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged).
 pub fn g2p(
@@ -835,7 +835,7 @@ pub fn g2p(
         });
 }
 
-/// One explicit MPM step (SPEC §2): [`p2g`], [`grid_update`], [`g2p`].
+/// One explicit MPM step (docs/method.md §2): [`p2g`], [`grid_update`], [`g2p`].
 pub fn step(
     particles: &mut Particles,
     grid: &mut Grid,
@@ -869,7 +869,7 @@ pub struct Health {
     pub non_finite: usize,
     /// Finite particles whose stencil is not on the grid (left the domain).
     pub outside: usize,
-    /// Finite particles with |v| Δt ≥ Δx (SPEC §2's velocity CFL bound).
+    /// Finite particles with |v| Δt ≥ Δx (docs/method.md §2's velocity CFL bound).
     pub too_fast: usize,
     /// Lowest index of a non-finite particle.
     pub first_non_finite: Option<usize>,

@@ -1,4 +1,4 @@
-//! Deforming the Gaussians (SPEC §6) on the GPU: `shaders/sim/derive.wgsl` writes each
+//! Deforming the Gaussians (docs/method.md §6) on the GPU: `shaders/sim/derive.wgsl` writes each
 //! simulated particle's Gaussian — mean x_p, covariance F A Fᵀ, rest frame rotated by
 //! polar(F) — into the renderer's Gaussian buffer, so a frame goes from simulation to
 //! image without a CPU round trip. [`derive_gaussian`] is the f64 twin the pass is tested
@@ -35,7 +35,7 @@ pub struct RestGaussian {
 }
 
 /// The deformed Gaussian of a particle at `x` with deformation gradient `f`, whose rest
-/// covariance is `a` and rest-frame rotation `r0` (SPEC §6).
+/// covariance is `a` and rest-frame rotation `r0` (docs/method.md §6).
 pub fn derive_gaussian(x: DVec3, f: DMat3, a: DMat3, r0: DQuat) -> (DVec3, DMat3, DQuat) {
     let (r, _) = polar(f);
     (
@@ -45,7 +45,7 @@ pub fn derive_gaussian(x: DVec3, f: DMat3, a: DMat3, r0: DQuat) -> (DVec3, DMat3
     )
 }
 
-/// The deformed normal of a Gaussian with rest normal `n0` (SPEC §8): n = F⁻ᵀ n₀,
+/// The deformed normal of a Gaussian with rest normal `n0` (docs/method.md §8): n = F⁻ᵀ n₀,
 /// normalised (the twin of the normal transport in `shaders/sim/derive.wgsl`).
 pub fn derive_normal(f: DMat3, n0: DVec3) -> DVec3 {
     (f.inverse().transpose() * n0).normalize()

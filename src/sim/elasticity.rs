@@ -1,6 +1,6 @@
-//! Elastic constitutive models (SPEC §3): Lamé parameters and Kirchhoff stresses τ(F).
+//! Elastic constitutive models (docs/method.md §3): Lamé parameters and Kirchhoff stresses τ(F).
 //!
-//! The MPM step (SPEC §2) needs the Kirchhoff stress τ = P Fᵀ = J σ_Cauchy, which both
+//! The MPM step (docs/method.md §2) needs the Kirchhoff stress τ = P Fᵀ = J σ_Cauchy, which both
 //! models here give in closed form. Both are objective (τ(RF) = R τ(F) Rᵀ) and isotropic;
 //! their small-strain limit is linear elasticity τ ≈ λ tr(ε) I + 2μ ε.
 
@@ -16,7 +16,7 @@ pub struct Lame {
 }
 
 impl Lame {
-    /// SPEC §3: μ = E / (2(1 + ν)), λ = Eν / ((1 + ν)(1 − 2ν)). Needs −1 < ν < ½.
+    /// docs/method.md §3: μ = E / (2(1 + ν)), λ = Eν / ((1 + ν)(1 − 2ν)). Needs −1 < ν < ½.
     pub fn from_young_poisson(e: f64, nu: f64) -> Self {
         Lame {
             mu: e / (2.0 * (1.0 + nu)),
@@ -24,18 +24,18 @@ impl Lame {
         }
     }
 
-    /// Bulk modulus κ = λ + 2μ/3 = E / (3(1 − 2ν)) (SPEC §3).
+    /// Bulk modulus κ = λ + 2μ/3 = E / (3(1 − 2ν)) (docs/method.md §3).
     pub fn kappa(&self) -> f64 {
         self.lambda + 2.0 * self.mu / 3.0
     }
 
-    /// P-wave modulus λ + 2μ, for the CFL sound speed c = sqrt((λ + 2μ)/ρ) (SPEC §2).
+    /// P-wave modulus λ + 2μ, for the CFL sound speed c = sqrt((λ + 2μ)/ρ) (docs/method.md §2).
     pub fn p_wave_modulus(&self) -> f64 {
         self.lambda + 2.0 * self.mu
     }
 }
 
-/// The elastic models of SPEC §3.
+/// The elastic models of docs/method.md §3.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ElasticModel {
     /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I.
@@ -54,7 +54,7 @@ pub fn dev(a: DMat3) -> DMat3 {
     a - DMat3::IDENTITY * (trace(a) / 3.0)
 }
 
-/// Fixed-corotated Kirchhoff stress (SPEC §3): τ = 2μ (F − R) Fᵀ + λ (J − 1) J I, with R
+/// Fixed-corotated Kirchhoff stress (docs/method.md §3): τ = 2μ (F − R) Fᵀ + λ (J − 1) J I, with R
 /// the rotation of the polar decomposition (a proper rotation even if det F < 0).
 pub fn kirchhoff_fixed_corotated(f: DMat3, lame: &Lame) -> DMat3 {
     let (r, _) = polar(f);
@@ -62,7 +62,7 @@ pub fn kirchhoff_fixed_corotated(f: DMat3, lame: &Lame) -> DMat3 {
     (f - r) * f.transpose() * (2.0 * lame.mu) + DMat3::IDENTITY * (lame.lambda * (j - 1.0) * j)
 }
 
-/// Neo-Hookean (Borden form) Kirchhoff stress (SPEC §3):
+/// Neo-Hookean (Borden form) Kirchhoff stress (docs/method.md §3):
 /// τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I. Needs J > 0.
 pub fn kirchhoff_neo_hookean(f: DMat3, lame: &Lame) -> DMat3 {
     let j = f.determinant();
@@ -79,7 +79,7 @@ pub fn kirchhoff(model: ElasticModel, f: DMat3, lame: &Lame) -> DMat3 {
 }
 
 /// Strain energy density ψ(F) per unit rest volume, for testing τ = (∂ψ/∂F) Fᵀ.
-/// Fixed corotated: μ Σ(σᵢ − 1)² + λ/2 (J − 1)²; Neo-Hookean (SPEC §3):
+/// Fixed corotated: μ Σ(σᵢ − 1)² + λ/2 (J − 1)²; Neo-Hookean (docs/method.md §3):
 /// μ/2 (tr(J^(−2/3) F Fᵀ) − 3) + κ/2 ((J² − 1)/2 − ln J).
 pub fn energy_density(model: ElasticModel, f: DMat3, lame: &Lame) -> f64 {
     let j = f.determinant();
@@ -186,7 +186,7 @@ mod tests {
     }
 
     /// Neo-Hookean under pure dilation F = J^(1/3) I: τ = κ/2 (J² − 1) I exactly, i.e.
-    /// pressure p = −tr(τ)/3 = κ/2 (1 − J²) (SPEC §4's p).
+    /// pressure p = −tr(τ)/3 = κ/2 (1 − J²) (docs/method.md §4's p).
     #[test]
     fn neo_hookean_dilation_pressure() {
         let l = lame();

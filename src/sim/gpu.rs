@@ -1,4 +1,4 @@
-//! The explicit MPM step on the GPU (SPEC §2), mirroring [`super::cpu`] pass for pass:
+//! The explicit MPM step on the GPU (docs/method.md §2), mirroring [`super::cpu`] pass for pass:
 //!
 //! 1. `shaders/sim/step/prepare.wgsl` — per particle: base-cell sort key and the affine
 //!    term m C − Δt V⁰ (4/Δx²) τ(F);
@@ -1126,7 +1126,7 @@ impl GpuSim {
         .sum()
     }
 
-    /// The watchdog (SPEC §2): particles that became non-finite, and particles that left the
+    /// The watchdog (docs/method.md §2): particles that became non-finite, and particles that left the
     /// domain, over the steps since the last call (a 16-byte readback; then cleared).
     pub fn take_watchdog(&self, gpu: &GpuContext) -> Result<Watchdog, GpuError> {
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {

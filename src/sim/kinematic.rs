@@ -1,4 +1,4 @@
-//! Moving kinematic colliders (SPEC §2, grid update): rigid solids with a prescribed path —
+//! Moving kinematic colliders (docs/method.md §2, grid update): rigid solids with a prescribed path —
 //! a knife, a projectile — that push, cut and carry the material.
 //!
 //! A collider is a shape in its own frame ([`ColliderShape`]: sphere, box, or cylinder

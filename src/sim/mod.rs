@@ -1,10 +1,10 @@
-//! The CPU side of the MPM physics (SPEC §2–§4, §6) as pure f64 functions: the oracle the
+//! The CPU side of the MPM physics (docs/method.md §2–§4, §6) as pure f64 functions: the oracle the
 //! f32 WGSL kernels are tested against (the GPU runs the same formulas in f32; compare with
 //! tolerances scaled to f32, not bit for bit).
 //!
-//! Where each SPEC formula lives:
+//! Where each formula of `docs/method.md` lives:
 //!
-//! | SPEC | formula | here |
+//! | method | formula | here |
 //! |---|---|---|
 //! | §2 | quadratic B-spline weights w0/w1/w2, base, fx, d_ip, ∇w | [`bspline`] |
 //! | §2 | MLS factor 4/Δx² = D_p⁻¹ (Σ w d dᵀ = Δx²/4 I) | [`bspline`] (tested) |

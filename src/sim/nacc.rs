@@ -1,5 +1,5 @@
-//! Non-Associated Cam-Clay (NACC) plasticity of CD-MPM (SPEC §4) on top of the Borden
-//! Neo-Hookean elasticity (SPEC §3), as a pure f64 oracle for the f32 WGSL kernel.
+//! Non-Associated Cam-Clay (NACC) plasticity of CD-MPM (docs/method.md §4) on top of the Borden
+//! Neo-Hookean elasticity (docs/method.md §3), as a pure f64 oracle for the f32 WGSL kernel.
 //!
 //! Everything happens in principal space of the trial elastic gradient
 //! `F_tr = U diag(σ) Vᵀ` ([`svd3`]):
@@ -28,31 +28,31 @@ use glam::{DMat3, DVec3};
 use super::elasticity::Lame;
 use super::svd::svd3;
 
-/// The floor ε₀ of the cohesion p0 = κ (ε₀ + sinh(…)) (SPEC §4, as in the reference code).
+/// The floor ε₀ of the cohesion p0 = κ (ε₀ + sinh(…)) (docs/method.md §4, as in the reference code).
 pub const EPS0: f64 = 1e-5;
 
 /// Largest argument of the sinh in p0. sinh(20) ≈ 2.4e8, so p0 ≤ κ (ε₀ + 2.4e8) and the
-/// terms of y stay below f32's 3.4e38 for κ up to ~1e10 (SPEC §4: "clamp the sinh argument
+/// terms of y stay below f32's 3.4e38 for κ up to ~1e10 (docs/method.md §4: "clamp the sinh argument
 /// against f32 overflow"). Reaching it needs α ≤ −20/ξ (plastic volume ratio e^(−20/ξ),
 /// 4.5e-5 for ξ = 2), and p0 is then far beyond the reachable pressures (p < κ/2 in
 /// compression), so the clamp changes nothing physical.
 pub const SINH_ARG_MAX: f64 = 20.0;
 
 /// Singular values of the trial F are clamped to at least this before evaluating J, p, q
-/// (SPEC §4: "clamp σ away from 0"). This also maps an inverted trial state (σ₃ < 0, see
+/// (docs/method.md §4: "clamp σ away from 0"). This also maps an inverted trial state (σ₃ < 0, see
 /// [`svd3`]) to a strongly compressed, non-inverted one, which the return mapping then
 /// treats as compression (it lands on the upper tip when p0 < κ/2; see [`return_map`] for
 /// the elastic case).
 pub const SIGMA_MIN: f64 = 1e-4;
 
-/// Friction-angle form of the critical-state slope: M = 6 sin φ / (3 − sin φ) (SPEC §4),
+/// Friction-angle form of the critical-state slope: M = 6 sin φ / (3 − sin φ) (docs/method.md §4),
 /// φ in radians.
 pub fn m_from_friction_angle(phi: f64) -> f64 {
     let s = phi.sin();
     6.0 * s / (3.0 - s)
 }
 
-/// NACC material parameters (SPEC §4); density lives with the particle, not here.
+/// NACC material parameters (docs/method.md §4); density lives with the particle, not here.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NaccParams {
     /// Young's modulus E.
@@ -70,7 +70,7 @@ pub struct NaccParams {
 }
 
 impl NaccParams {
-    /// Lamé parameters from (E, ν) (SPEC §3).
+    /// Lamé parameters from (E, ν) (docs/method.md §3).
     pub fn lame(&self) -> Lame {
         Lame::from_young_poisson(self.e, self.nu)
     }
@@ -86,7 +86,7 @@ impl NaccParams {
     }
 
     /// Cohesion p0(α) = κ (ε₀ + sinh(ξ max(−α, 0))), sinh argument clamped at
-    /// [`SINH_ARG_MAX`] (SPEC §4).
+    /// [`SINH_ARG_MAX`] (docs/method.md §4).
     pub fn p0(&self, alpha: f64) -> f64 {
         let arg = (self.xi * (-alpha).max(0.0)).min(SINH_ARG_MAX);
         self.kappa() * (EPS0 + arg.sinh())
@@ -102,7 +102,7 @@ impl NaccParams {
     }
 }
 
-/// The yield surface y(p, q) = 0 for one p0 (SPEC §4).
+/// The yield surface y(p, q) = 0 for one p0 (docs/method.md §4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct YieldEllipse {
     pub p0: f64,
@@ -150,7 +150,7 @@ impl YieldEllipse {
     }
 }
 
-/// The case-3 (interior) return mappings of SPEC §4, selectable per material.
+/// The case-3 (interior) return mappings of docs/method.md §4, selectable per material.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Case3Variant {
     /// Original CD-MPM: towards the centre (p_c, 0); discontinuous at the right tip.
@@ -162,7 +162,7 @@ pub enum Case3Variant {
     ClosestPoint,
 }
 
-/// Which row of SPEC §4's return-mapping table applied.
+/// Which row of docs/method.md §4's return-mapping table applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ReturnCase {
     /// y_tr ≤ 0: unchanged.
@@ -176,7 +176,7 @@ pub enum ReturnCase {
 }
 
 /// Intersection of the segment from (p_start, 0) (inside the ellipse) to (p_tr, q_tr)
-/// (outside) with y = 0 (SPEC §4, `center` and `continuous`). In u = p − p_c the segment is
+/// (outside) with y = 0 (docs/method.md §4, `center` and `continuous`). In u = p − p_c the segment is
 /// (u* + t d, t q_tr) and y(t) = A t² + B t + C with C = M²(u*² − a²) ≤ 0 < A, so the root
 /// in (0, 1] is unique; it is taken in the cancellation-free form.
 pub fn segment_intersection(ell: &YieldEllipse, p_start: f64, p_tr: f64, q_tr: f64) -> (f64, f64) {
@@ -204,12 +204,12 @@ pub fn segment_intersection(ell: &YieldEllipse, p_start: f64, p_tr: f64, q_tr: f
     (p_start + t * d, t * q_tr)
 }
 
-/// `center` (SPEC §4): towards (p_c, 0).
+/// `center` (docs/method.md §4): towards (p_c, 0).
 pub fn project_center(ell: &YieldEllipse, p_tr: f64, q_tr: f64) -> (f64, f64) {
     segment_intersection(ell, ell.center(), p_tr, q_tr)
 }
 
-/// `continuous{k}` (SPEC §4): towards the pseudo-centre p*_c = p_c + φ_k (p_tr − p_c),
+/// `continuous{k}` (docs/method.md §4): towards the pseudo-centre p*_c = p_c + φ_k (p_tr − p_c),
 /// φ_k = |(p_tr − p_c)/L_p|^k clamped to [0, 1], L_p = p0 − p_c.
 pub fn project_continuous(ell: &YieldEllipse, p_tr: f64, q_tr: f64, k: f64) -> (f64, f64) {
     let pc = ell.center();
@@ -221,7 +221,7 @@ pub fn project_continuous(ell: &YieldEllipse, p_tr: f64, q_tr: f64, k: f64) -> (
 /// bracket can no longer shrink), an f32 kernel ~30.
 const BISECTION_STEPS: usize = 200;
 
-/// `closest_point` (SPEC §4): the point of the ellipse nearest to (p_tr, q_tr), for a trial
+/// `closest_point` (docs/method.md §4): the point of the ellipse nearest to (p_tr, q_tr), for a trial
 /// point outside it. The normal return (p, q) = (p_tr, q_tr) − Δγ ∇y gives, in units of
 /// the half width a, x_i = e_i² z_i / (t + e_i²) with (e₀, e₁) = (1, b/a) and z the trial
 /// point, t = 2 M² a² Δγ ≥ 0 the root of G(t) = Σ (e_i z_i / (t + e_i²))² − 1. G decreases
@@ -259,7 +259,7 @@ pub fn project_closest_point(ell: &YieldEllipse, p_tr: f64, q_tr: f64) -> (f64, 
     (ell.center() + u.signum() * x0 * a, q_tr.signum() * x1 * a)
 }
 
-/// The return mapping R: (p_tr, q_tr) → (p_new, q_new) of SPEC §4's table.
+/// The return mapping R: (p_tr, q_tr) → (p_new, q_new) of docs/method.md §4's table.
 pub fn project_pq(
     ell: &YieldEllipse,
     p_tr: f64,
@@ -283,7 +283,7 @@ pub fn project_pq(
     (p, q, ReturnCase::Interior)
 }
 
-/// Principal-space quantities of an elastic state (SPEC §4).
+/// Principal-space quantities of an elastic state (docs/method.md §4).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PrincipalState {
     /// J = σ₁σ₂σ₃.
@@ -303,7 +303,7 @@ fn mean(v: DVec3) -> f64 {
     (v.x + v.y + v.z) / 3.0
 }
 
-/// J, b̄, p, s, q of principal stretches σ (all > 0) (SPEC §4).
+/// J, b̄, p, s, q of principal stretches σ (all > 0) (docs/method.md §4).
 pub fn principal_state(sigma: DVec3, kappa: f64, mu: f64) -> PrincipalState {
     let j = sigma.x * sigma.y * sigma.z;
     let b_bar = sigma * sigma * j.powf(-2.0 / 3.0);
@@ -317,7 +317,7 @@ pub fn principal_state(sigma: DVec3, kappa: f64, mu: f64) -> PrincipalState {
     }
 }
 
-/// Inverse of p(J): J_E(p) = sqrt(1 − 2p/κ) (SPEC §4). For p ≥ κ/2 (only reachable when
+/// Inverse of p(J): J_E(p) = sqrt(1 − 2p/κ) (docs/method.md §4). For p ≥ κ/2 (only reachable when
 /// p0 ≥ κ/2 after extreme hardening) the radicand is floored so J stays ≥ SIGMA_MIN³.
 pub fn j_from_pressure(p: f64, kappa: f64) -> f64 {
     let floor = SIGMA_MIN.powi(6);
@@ -327,9 +327,9 @@ pub fn j_from_pressure(p: f64, kappa: f64) -> f64 {
 /// Most Newton steps of [`solve_b_bar`]; f64 takes ≤ 6 in practice.
 const NEWTON_STEPS: usize = 60;
 
-/// b̄ = d + c (1,1,1) with det b̄ = 1, for a deviatoric d (Σ d = 0) (SPEC §4's det = 1
+/// b̄ = d + c (1,1,1) with det b̄ = 1, for a deviatoric d (Σ d = 0) (docs/method.md §4's det = 1
 /// choice). g(c) = Π(d_i + c) − 1 is increasing and convex for c > −min d, so Newton started
-/// where g ≥ 0 converges monotonically from the right. The start is `c_start` (SPEC: the
+/// where g ≥ 0 converges monotonically from the right. The start is `c_start` (docs/method.md §4: the
 /// trial mean(b̄)); g(c_start) ≥ 0 holds whenever d = λ d_tr with λ ∈ [0, 1], since
 /// ln Π(c_tr + λ d_tr,i) is concave in λ, 0 at λ = 1 and 3 ln c_tr ≥ 0 (AM-GM) at λ = 0.
 /// Any other start falls back to 1 − min d (every factor ≥ 1, so g ≥ 0).
@@ -351,7 +351,7 @@ pub fn solve_b_bar(d: DVec3, c_start: f64) -> DVec3 {
     d + DVec3::splat(c)
 }
 
-/// Principal stretches of the returned state (SPEC §4): J_new = J_E(p_new),
+/// Principal stretches of the returned state (docs/method.md §4): J_new = J_E(p_new),
 /// s_new = s q_new / q_tr, b̄_new from [`solve_b_bar`], σ_new = J_new^(1/3) sqrt(b̄_new).
 pub fn stretches_from_pq(
     trial: &PrincipalState,
@@ -388,7 +388,7 @@ pub struct PlasticReturn {
     pub q: f64,
 }
 
-/// NACC return mapping of a trial elastic gradient (SPEC §4), with p0 from the α at the
+/// NACC return mapping of a trial elastic gradient (docs/method.md §4), with p0 from the α at the
 /// start of the step and hardening α ← α + ln(J_tr / J_new) when y_tr > 0.
 ///
 /// Elastic trial states come back unchanged, except that a state with some σ below

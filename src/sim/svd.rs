@@ -1,5 +1,5 @@
 //! 3×3 singular value decomposition with the rotation sign convention, and the polar
-//! decomposition built on it (SPEC §4, §6; §3's fixed-corotated R).
+//! decomposition built on it (docs/method.md §4, §6; §3's fixed-corotated R).
 //!
 //! **Convention.** `F = U diag(σ) Vᵀ` with `U`, `V` proper rotations (det = +1) and
 //! `σ₁ ≥ σ₂ ≥ |σ₃|`. When det F < 0 no such factorisation has all σ ≥ 0; the sign is pushed
@@ -277,7 +277,7 @@ pub fn svd3(f: DMat3) -> Svd3 {
 
 /// Polar decomposition `F = R S`: `R = U Vᵀ` a rotation (det +1), `S = V diag(σ) Vᵀ`
 /// symmetric. When det F < 0, S has one negative eigenvalue (σ₃); R stays a rotation, which
-/// is what the fixed-corotated stress (SPEC §3) and the SH frame (SPEC §6) need.
+/// is what the fixed-corotated stress (docs/method.md §3) and the SH frame (docs/method.md §6) need.
 pub fn polar(f: DMat3) -> (DMat3, DMat3) {
     let svd = svd3(f);
     let r = svd.u * svd.v.transpose();

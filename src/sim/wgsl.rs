@@ -20,13 +20,13 @@ use super::nacc::{Case3Variant, NaccParams, ReturnCase};
 /// Helpers every other module uses (finiteness by bits, diag, trace, exact power-of-two
 /// scaling, a cancellation-free sinh).
 pub const MATH: &str = include_str!("../../shaders/sim/math.wgsl");
-/// Quadratic B-spline stencil (SPEC §2). Needs [`MATH`].
+/// Quadratic B-spline stencil (docs/method.md §2). Needs [`MATH`].
 pub const BSPLINE: &str = include_str!("../../shaders/sim/bspline.wgsl");
-/// 3×3 SVD with det U = det V = +1 and the polar decomposition (SPEC §4, §6). Needs [`MATH`].
+/// 3×3 SVD with det U = det V = +1 and the polar decomposition (docs/method.md §4, §6). Needs [`MATH`].
 pub const SVD: &str = include_str!("../../shaders/sim/svd.wgsl");
-/// Kirchhoff stresses (SPEC §3). Needs [`MATH`], [`SVD`].
+/// Kirchhoff stresses (docs/method.md §3). Needs [`MATH`], [`SVD`].
 pub const ELASTICITY: &str = include_str!("../../shaders/sim/elasticity.wgsl");
-/// NACC return mapping (SPEC §4). Needs [`MATH`], [`SVD`].
+/// NACC return mapping (docs/method.md §4). Needs [`MATH`], [`SVD`].
 pub const NACC: &str = include_str!("../../shaders/sim/nacc.wgsl");
 
 /// All simulation modules in dependency order, ready to prepend to a kernel.

@@ -174,7 +174,8 @@ impl Asset {
     /// Approximate depth below the surface of a point inside: the shortest escape along 26
     /// directions (axes, face and space diagonals), marched in steps of 1/16 of the
     /// smallest half extent (thinner gaps may be stepped over) and refined by bisection to
-    /// 1/16 000 of it. 0 outside. About 100 µs a point: for shell regions, not per frame.
+    /// 1/16 000 of it. 0 outside. Hundreds of ray marches a point: for shell regions at
+    /// setup, not per frame.
     pub fn depth(&self, p: [f64; 3]) -> f64 {
         let p = DVec3::from_array(p);
         if !self.contains(p.to_array()) {

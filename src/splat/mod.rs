@@ -1,5 +1,5 @@
 //! Gaussian clouds: the in-memory representation, PLY input/output, spherical harmonics,
-//! and procedural objects (SPEC §1, §5).
+//! and procedural objects (docs/method.md §1, §5).
 
 pub mod assets;
 pub mod ply;
@@ -13,7 +13,7 @@ use glam::{Mat3, Quat, Vec3};
 /// Everything is in *linear* (activated) form: `opacities` are in (0, 1] (the PLY's logit
 /// has been through a sigmoid), `scales` are standard deviations (the PLY's log has been
 /// through exp), `rotations` are unit quaternions. The rest covariance of Gaussian p is
-/// A_p = R S Sᵀ Rᵀ with R = rotation, S = diag(scale) (SPEC §1).
+/// A_p = R S Sᵀ Rᵀ with R = rotation, S = diag(scale) (docs/method.md §1).
 ///
 /// Spherical-harmonic coefficients are stored coefficient-major per Gaussian:
 /// `sh[p * K * 3 + k * 3 + c]` is coefficient k (0 = DC) of colour channel c, with

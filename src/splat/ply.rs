@@ -1,4 +1,4 @@
-//! 3DGS PLY files: read (binary little-endian and ASCII) and write (SPEC §5).
+//! 3DGS PLY files: read (binary little-endian and ASCII) and write (docs/method.md §5).
 //!
 //! The standard 3DGS layout is one element `vertex` with the float properties
 //! `x y z`, optional `nx ny nz`, `f_dc_0..2`, `f_rest_0..(3·((d+1)²−1)−1)`, `opacity`,

@@ -1,4 +1,4 @@
-//! Real spherical harmonics as used by 3DGS (SPEC §5, §7).
+//! Real spherical harmonics as used by 3DGS (docs/method.md §5, §7).
 //!
 //! The basis and its constants are those of the 3DGS reference implementation, so that
 //! trained captures render with the colours they were trained with. Colour is

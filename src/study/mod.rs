@@ -1,4 +1,4 @@
-//! Speed against accuracy (issue 6): `splatter bench suite` ([`suite`]) and
+//! Speed against accuracy: `splatter bench suite` ([`suite`]) and
 //! `splatter bench accuracy` — the convergence study ([`convergence`]) and the stability
 //! atlas ([`atlas`]), written as JSON (`OUT/data/`), markdown tables next to it and PNG
 //! charts (`OUT/images/`). The charts and tables are drawn from the JSON as written and

@@ -64,7 +64,7 @@ pub fn simulate(
     }
 }
 
-/// The paper's frame (Δt_frame = 1/50 s, SPEC §9): costs are reported per such frame of
+/// The paper's frame (Δt_frame = 1/50 s, docs/method.md §9): costs are reported per such frame of
 /// simulated time.
 pub const FRAME_S: f64 = 1.0 / 50.0;
 

@@ -1,6 +1,6 @@
 //! `splatter bench suite`: the simulation, render and end-to-end benchmarks in one run,
 //! written as JSON and as a markdown table next to the paper's seconds per frame
-//! (SPEC §9), with the adapter, the machine's cores and the command line.
+//! (docs/method.md §9), with the adapter, the machine's cores and the command line.
 //!
 //! End to end means what a user waits for: `splatter render SCENE` run as a child process
 //! for a few frames (simulation steps, derive, render, PNG writing), timed per frame from
@@ -23,7 +23,7 @@ use crate::output::manifest::Manifest;
 use crate::render::{Camera, GpuRenderer};
 use crate::run::{one_line, Input, Run, RunOptions};
 
-/// One row of SPEC §9's table: what the paper reports for an example.
+/// One row of docs/method.md §9's table: what the paper reports for an example.
 #[derive(Clone, Copy, Debug)]
 pub struct PaperExample {
     /// File stem under `scenes/`.
@@ -37,7 +37,7 @@ pub struct PaperExample {
     pub dt_frame: f64,
 }
 
-/// SPEC §9 (seed Table A1, cleaned).
+/// docs/method.md §9 (the source paper's Table A1, as read there).
 pub const PAPER_EXAMPLES: [PaperExample; 8] = [
     ex("watermelon", 3.56, 27e6, 3e-3, 1e-4, 1.0 / 50.0),
     ex("jelly", 0.39, 1e6, 3e-3, 1e-5, 1.0 / 500.0),

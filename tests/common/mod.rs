@@ -4,7 +4,7 @@
 
 use splatter::sim::nacc::{Case3Variant, NaccParams};
 
-/// The paper's fruit material (SPEC §9: kiwi/dragonfruit class).
+/// The paper's fruit material (docs/method.md §9: kiwi/dragonfruit class).
 pub fn fruit() -> NaccParams {
     NaccParams {
         e: 2000.0,

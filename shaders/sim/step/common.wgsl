@@ -1,4 +1,4 @@
-// Shared declarations of the MPM step passes (SPEC §2). Mirrored by `#[repr(C)]` types in
+// Shared declarations of the MPM step passes (docs/method.md §2). Mirrored by `#[repr(C)]` types in
 // src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). Concatenated after
 // shaders/sim/{math,bspline,svd,elasticity,nacc}.wgsl.
 
@@ -99,7 +99,7 @@ struct SimStep {
 // than taking the struct as a parameter: the struct is over a kilobyte, and CPU drivers
 // (lavapipe) copy by-value arguments. A read-only storage buffer rather than a uniform:
 // lavapipe specialises a shader on uniform values that steer its branches and loops, and
-// re-specialised the grid pass on every dispatch (2 ms each, measured by
+// re-specialised the grid pass on every dispatch (visible in
 // `splatter bench sim --per-pass`).
 @group(0) @binding(0) var<storage, read> step: SimStep;
 
@@ -138,7 +138,7 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
 
 // Active blocks. The node passes visit only blocks of 4×4×4 nodes that some particle's
 // stencil reaches, one workgroup of 64 invocations per block: most of a domain is air, and
-// even skipping an empty node costs a load (3.9 ms for 65³ nodes on lavapipe). Particle
+// even skipping an empty node costs a load. Particle
 // passes flag the blocks (mark_blocks.wgsl, p2g_scatter.wgsl), compact_blocks.wgsl lists
 // them, and the node passes are dispatched indirectly over the list.
 const BLOCK: u32 = 4u;

@@ -1,6 +1,6 @@
-// G2P (per particle, SPEC §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
+// G2P (per particle, docs/method.md §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
 // F ← (I + Δt C) F, x += Δt v_p, then the material's plasticity (NACC return mapping,
-// SPEC §4). A particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
+// docs/method.md §4). A particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
 
 @group(0) @binding(1) var<storage, read_write> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> v_volume: array<vec4<f32>>;
@@ -9,7 +9,7 @@
 @group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
 @group(0) @binding(6) var<storage, read> material: array<u32>;
 @group(0) @binding(7) var<storage, read> grid: array<vec4<f32>>;
-// The watchdog's counters (SPEC §2): [0] particles with a non-finite position, velocity or
+// The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
 // F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
 // [3] steps since the last read (compact_blocks.wgsl). Read and cleared once per frame.

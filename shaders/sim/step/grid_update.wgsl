@@ -1,8 +1,8 @@
-// Grid update (SPEC §2 step 2), as functions called by the P2G gather right after a node's
+// Grid update (docs/method.md §2 step 2), as functions called by the P2G gather right after a node's
 // mass and momentum are summed (one pass over the nodes instead of two): v_i = p_i / m_i
 // where m_i > 0, v_i += Δt g, then the planar colliders, the moving (kinematic) colliders at
 // this substep's pose and the domain walls (nodes within `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
-// — never v = 0 (SPEC §2). Mirrors `cpu::grid_update` and `cpu::Condition::apply`.
+// — never v = 0 (docs/method.md §2). Mirrors `cpu::grid_update` and `cpu::Condition::apply`.
 
 fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let vn = dot(v, n);

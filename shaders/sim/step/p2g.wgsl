@@ -1,7 +1,7 @@
 // P2G, part 2, and the grid update (per node of the active blocks): gather m_i = Σ w_ip m_p and
 // p_i = Σ w_ip (m_p v_p + affine_p d_ip) over the particles of the 27 base cells whose
-// stencils reach node i (SPEC §2 step 1), then the node's velocity (grid_update.wgsl,
-// SPEC §2 step 2). Particles are sorted by base cell, so no atomics are needed: the sum has
+// stencils reach node i (docs/method.md §2 step 1), then the node's velocity (grid_update.wgsl,
+// docs/method.md §2 step 2). Particles are sorted by base cell, so no atomics are needed: the sum has
 // a fixed order and the result is the same on every run and every backend. Mirrors
 // `cpu::p2g` followed by `cpu::grid_update`.
 

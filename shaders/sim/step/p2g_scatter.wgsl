@@ -1,4 +1,4 @@
-// P2G with float atomics (per particle; SPEC §2 step 1), for adapters with
+// P2G with float atomics (per particle; docs/method.md §2 step 1), for adapters with
 // SHADER_FLOAT32_ATOMIC: each particle adds w_ip m_p and w_ip (m_p v_p + affine_p d_ip) to
 // its 27 nodes. Faster than the gather where atomics are native, but the order of the
 // additions — and so the last bits of the sums — varies from run to run; the gather path

@@ -1,5 +1,5 @@
 // P2G, part 1 (per particle): the particle's base cell as a sort key, and its affine
-// momentum term affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (SPEC §2 step 1), computed once
+// momentum term affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (docs/method.md §2 step 1), computed once
 // here rather than 27 times in the gather. Mirrors the item building in `cpu::p2g`.
 
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
@@ -15,7 +15,7 @@ fn kirchhoff(m: SimMaterial, f: mat3x3<f32>) -> mat3x3<f32> {
     if m.kind == MATERIAL_FIXED_COROTATED {
         return elastic_kirchhoff_fixed_corotated(f, m.mu, m.lambda);
     }
-    // Neo-Hookean (Borden) is also the elasticity under NACC (SPEC §3).
+    // Neo-Hookean (Borden) is also the elasticity under NACC (docs/method.md §3).
     return elastic_kirchhoff_neo_hookean(f, m.mu, m.kappa);
 }
 

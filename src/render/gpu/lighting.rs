@@ -1,4 +1,4 @@
-//! Relighting on the GPU (SPEC §8, docs/relighting.md): the shadow volume
+//! Relighting on the GPU (docs/method.md §8, docs/relighting.md): the shadow volume
 //! (`shaders/render/shadow_splat.wgsl`, `shadow_transmit.wgsl`) and the Blinn-Phong shade
 //! pass (`shade.wgsl`), all sharing `shaders/render/lighting.wgsl`. The renderer runs the
 //! shadow passes before projecting and the shade pass right after, so the rasteriser

@@ -1,4 +1,4 @@
-//! The GPU tile rasteriser (SPEC §7), one WGSL file and one Rust type per pass:
+//! The GPU tile rasteriser (docs/method.md §7), one WGSL file and one Rust type per pass:
 //!
 //! 1. [`passes::Project`] — project every Gaussian, SH colour, tile rectangle, depth key;
 //! 2. [`RadixSort`] — sort all Gaussians by depth (32-bit keys);
