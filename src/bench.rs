@@ -329,21 +329,21 @@ pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
 /// `continuous` k = 2) of 8 particles per cell falling onto a sticky ground in a unit
 /// domain of `cells`³ cells: contact, plasticity and free flight in one run.
 pub struct SimCase {
-    pub particles: crate::sim::cpu::Particles,
-    pub grid: crate::sim::cpu::Grid,
-    pub material: crate::sim::cpu::Material,
-    pub params: crate::sim::cpu::StepParams,
+    pub particles: crate::sim::Particles,
+    pub grid: crate::sim::Grid,
+    pub material: crate::sim::Material,
+    pub params: crate::sim::StepParams,
     pub cells: u32,
 }
 
 impl SimCase {
     /// About `n` particles on a `cells`³ grid.
     pub fn new(n: usize, cells: u32) -> SimCase {
-        use crate::sim::cpu::{
+        use crate::sim::nacc::{Case3Variant, NaccParams};
+        use crate::sim::{
             cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams,
             Transfer,
         };
-        use crate::sim::nacc::{Case3Variant, NaccParams};
         use glam::DVec3;
         let material = Material::Nacc {
             params: NaccParams {

@@ -34,14 +34,13 @@ use crate::output::{write_atomically, OutputError};
 use crate::render::Splats;
 use crate::scene::simulation::SimulationSetup;
 use crate::scene::Scene;
-use crate::sim::cpu::Particles;
+use crate::sim::Particles;
 
 /// The first 8 bytes of a checkpoint.
 pub const MAGIC: &[u8; 8] = b"SPLTCKPT";
 /// Bumped whenever the layout changes; other versions are refused.
 pub const FORMAT_VERSION: u32 = 1;
-/// This program's version, as written into checkpoints and manifests.
-pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
+pub use crate::PROGRAM_VERSION;
 
 const VERSION_BYTES: usize = 32;
 const HEADER_BYTES: usize = 8 + 4 + VERSION_BYTES + 8 + 4 + 4 + 4 + 8;

@@ -4,9 +4,15 @@
 //! **simulate** (MPM, GPU) → **derive** (deformed Gaussians) → **render**
 //! (tile-based splatting, GPU) → PNG frames (writer thread).
 
+/// This program's version, as written into checkpoints and manifests.
+pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
+
 pub mod bench;
 pub mod checkpoint;
+pub mod derive;
 pub mod farm;
+pub mod files;
+pub mod fragments;
 pub mod gpu;
 pub mod limits;
 pub mod output;
@@ -17,4 +23,5 @@ pub mod run;
 pub mod scene;
 pub mod sim;
 pub mod splat;
+pub mod spline;
 pub mod study;

@@ -63,7 +63,7 @@ pub fn render_needs(gaussians: usize, width: u32, height: u32) -> Vec<Need> {
 }
 
 /// The simulation's largest buffers for `particles` particles on a grid of `cells` cells
-/// per axis ([`Grid::cells`](crate::sim::cpu::Grid)).
+/// per axis ([`Grid::cells`](crate::sim::Grid)).
 pub fn sim_needs(particles: usize, cells: UVec3) -> Vec<Need> {
     let n = particles as u64;
     let nodes: u64 = cells.to_array().iter().map(|c| u64::from(*c) + 1).product();

@@ -1,10 +1,10 @@
 //! The renderer's GPU building blocks against plain CPU versions: the prefix sum (with its
 //! saturation) and the stable radix sort.
 
+use splatter::gpu::scan::Scan;
+use splatter::gpu::sort::{RadixSort, SortBuffers};
 use splatter::gpu::GpuContext;
-use splatter::render::gpu::radix_sort::{RadixSort, SortBuffers};
 use splatter::render::gpu::read_buffer;
-use splatter::render::gpu::scan::Scan;
 use splatter::rng::SplitMix64;
 use wgpu::util::DeviceExt;
 

@@ -114,7 +114,7 @@ fn pca_normals_rotate_with_the_object() {
 // Rendered images (GPU)
 // ------------------------------------------------------------------------------------------
 
-use splatter::relight::gpu_normals::{spacing_of, GpuNormals, RecomputedObject};
+use splatter::derive::normals::{spacing_of, GpuNormals, RecomputedObject};
 use splatter::relight::shadow::VolumeGrid;
 use splatter::relight::{blinn_phong, oct_encode, PointLight, ShadingParams};
 use splatter::render::gpu::lighting::LightingSetup;
@@ -407,12 +407,12 @@ fn ray_plane(cam: &Camera, x: u32, y: u32) -> Option<Vec3> {
 /// `lighting.simulated_normals = "recompute"`.
 #[test]
 fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
+    use splatter::derive::Derive;
     use splatter::relight::oct_decode;
     use splatter::render::gpu::read_buffer;
-    use splatter::sim::cpu::{Boundaries, Grid, Material, Particles, StepParams, Transfer};
-    use splatter::sim::derive::Derive;
     use splatter::sim::gpu::GpuSim;
     use splatter::sim::nacc::{Case3Variant, NaccParams};
+    use splatter::sim::{Boundaries, Grid, Material, Particles, StepParams, Transfer};
 
     let spacing = 0.02;
     let half = 0.2;

@@ -3,9 +3,10 @@
 
 use glam::{DMat3, DVec3};
 use splatter::rng::SplitMix64;
-use splatter::sim::cpu::{
-    self, cfl_dt, check, step, Boundaries, Condition, DomainWalls, Grid, Material, Particles,
-    PlaneCollider, StepParams, Transfer,
+use splatter::sim::cpu::{self, check, step};
+use splatter::sim::{
+    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
+    StepParams, Transfer,
 };
 use splatter::sim::{Case3Variant, NaccParams};
 

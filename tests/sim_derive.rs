@@ -3,6 +3,7 @@
 //! CPU reference renderer fed with the CPU-derived Gaussians.
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3};
+use splatter::derive::{derive_gaussian, derive_normal, rest_covariance, Derive};
 use splatter::gpu::GpuContext;
 use splatter::relight::{oct_decode, oct_encode, ShadingParams};
 use splatter::render::gpu::layout::GaussianIn;
@@ -11,11 +12,10 @@ use splatter::render::gpu::read_buffer;
 use splatter::render::splats::{mat3_from_sym3, sym3_from_mat3};
 use splatter::render::{cpu, Camera, GpuRenderer, Splats};
 use splatter::rng::SplitMix64;
-use splatter::sim::cpu::{
+use splatter::sim::gpu::GpuSim;
+use splatter::sim::{
     Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
-use splatter::sim::derive::{derive_gaussian, derive_normal, rest_covariance, Derive};
-use splatter::sim::gpu::GpuSim;
 use splatter::splat::procedural::ProceduralSpec;
 
 fn read_gaussians(gpu: &GpuContext, renderer: &GpuRenderer, n: usize) -> Vec<GaussianIn> {

@@ -5,12 +5,13 @@
 
 use glam::{DMat3, DVec3};
 use splatter::gpu::GpuContext;
-use splatter::sim::cpu::{
-    cfl_dt, step, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
-    StepParams, Transfer,
-};
+use splatter::sim::cpu::step;
 use splatter::sim::gpu::{GpuSim, P2gPath};
 use splatter::sim::nacc::{Case3Variant, NaccParams};
+use splatter::sim::{
+    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
+    StepParams, Transfer,
+};
 
 const G: f64 = 9.8;
 

@@ -6,11 +6,12 @@
 
 use glam::{DVec3, Vec3};
 use splatter::gpu::GpuContext;
-use splatter::sim::cpu::{
-    step_at, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
-};
+use splatter::sim::cpu::step_at;
 use splatter::sim::gpu::{GpuSim, P2gPath};
 use splatter::sim::kinematic::{ColliderShape, KinematicCollider, RigidMotion};
+use splatter::sim::{
+    Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
+};
 
 fn params(dt: f64, gravity: DVec3, walls: DomainWalls) -> StepParams {
     StepParams {
@@ -326,9 +327,9 @@ const KNIFE_SCENE: &str = r#"{
 /// covariances turned with it), on the GPU.
 #[test]
 fn a_kinematic_object_in_a_scene_moves_its_gaussians_rigidly() {
+    use splatter::derive::RigidDerive;
     use splatter::render::GpuRenderer;
     use splatter::scene::simulation::{prepare, PartKind};
-    use splatter::sim::derive::RigidDerive;
     let scene =
         splatter::scene::parse(KNIFE_SCENE, "knife.json", std::path::Path::new(".")).unwrap();
     let (splats, report) = scene.build_splats().unwrap();
@@ -373,7 +374,7 @@ fn a_kinematic_object_in_a_scene_moves_its_gaussians_rigidly() {
         let want = a * setup.splats.means[g].as_dvec3() + b;
         let got = DVec3::from_slice(&out.mean_opacity.map(f64::from)[..3]);
         worst.0 = worst.0.max((want - got).length());
-        let c = splatter::sim::derive::rest_covariance(&setup.splats, g);
+        let c = splatter::derive::rest_covariance(&setup.splats, g);
         let want_c = a * c * a.transpose();
         let [xx, xy, xz, yy] = out.cov_a.map(f64::from);
         let err = (want_c.x_axis - DVec3::new(xx, xy, xz)).length() + (want_c.y_axis.y - yy).abs();

@@ -7,10 +7,10 @@ use std::time::Instant;
 
 use glam::DVec3;
 use splatter::gpu::GpuContext;
-use splatter::sim::cpu::{
+use splatter::sim::gpu::{GpuSim, P2gPath};
+use splatter::sim::{
     Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
-use splatter::sim::gpu::{GpuSim, P2gPath};
 
 /// A 0.2 m fruit (a jelly ball falling on a frictional ground) in a 1 m domain at Δx 0.01.
 fn fruit() -> (Particles, Grid, Vec<Material>, StepParams) {

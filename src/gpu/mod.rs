@@ -1,9 +1,14 @@
-//! wgpu context: adapter choice, limits, optional features, and the small helpers every
-//! GPU pass uses (kernels with derived layouts, buffers, readback).
+//! wgpu context: adapter choice, limits, optional features, and what every GPU pass
+//! uses: kernels with derived layouts, buffers, readback, and the primitives the renderer,
+//! the simulation and relighting share (radix [`sort`], prefix [`scan`], key [`ranges`]).
 
+pub mod buffers;
 mod kernel;
 #[cfg(test)]
 pub(crate) mod layout_check;
+pub mod ranges;
+pub mod scan;
+pub mod sort;
 
 pub use kernel::{dispatch_1d, Kernel};
 

@@ -110,7 +110,7 @@ impl Manifest {
         Manifest {
             format: MANIFEST_FORMAT,
             program: "splatter".into(),
-            version: crate::checkpoint::PROGRAM_VERSION.into(),
+            version: crate::PROGRAM_VERSION.into(),
             scene,
             scene_hash: format!("{scene_hash:016x}"),
             adapter,

@@ -66,30 +66,12 @@ pub fn write_png(path: &Path, width: u32, height: u32, rgba: &[u8]) -> Result<()
     write_atomically(path, &bytes)
 }
 
-/// Write `bytes` to a hidden temporary file beside `path`, then rename it to `path`, so
-/// that `path` is never seen partly written (a crash or a full disk leaves the old file, or
-/// none).
+/// [`crate::files::write_atomically`], with the path in the error.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
-    let tmp = temporary_name(path);
-    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Write {
-            path: path.to_owned(),
-            source,
-        }
+    crate::files::write_atomically(path, bytes).map_err(|source| OutputError::Write {
+        path: path.to_owned(),
+        source,
     })
-}
-
-/// `frame_00001.png` → `.frame_00001.png.<pid>.tmp` (hidden, so globbing `frame_*.png`
-/// never matches a partial file; the process id keeps two processes that write the same
-/// file — two farm jobs saving a checkpoint into one folder — off each other's temporary).
-fn temporary_name(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 struct Job {

@@ -6,7 +6,6 @@
 //! reference ([`shadow`]) and the normal packing shared with the GPU ([`oct_encode`]). The
 //! GPU passes live in `src/render/gpu/lighting.rs`.
 
-pub mod gpu_normals;
 pub mod normals;
 pub mod shadow;
 

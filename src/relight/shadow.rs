@@ -9,7 +9,7 @@
 
 use glam::{UVec3, Vec3};
 
-use crate::render::splats::Sym3;
+use crate::splat::Sym3;
 
 /// Fixed-point unit of the stored optical depth (`DEPTH_UNIT` in `lighting.wgsl`).
 pub const DEPTH_UNIT: f32 = 1.0 / 1024.0;

@@ -1,15 +1,15 @@
 //! `--fragments`: per rendered frame and simulated object, how many pieces its particles
-//! form ([`crate::study::fragments`]), appended to `OUT/fragments.csv` as the frames go.
+//! form ([`crate::fragments`]), appended to `OUT/fragments.csv` as the frames go.
 
 use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
 
+use crate::fragments::{fragment_sizes, FragmentSummary, PIECE_SHARE};
 use crate::scene::simulation::{PartKind, SimulationSetup};
 use crate::scene::Scene;
-use crate::sim::cpu::{Material, Particles};
-use crate::study::fragments::{fragment_sizes, FragmentSummary, PIECE_SHARE};
+use crate::sim::{Material, Particles};
 
 /// A CSV field: quoted (with doubled quotes) when it holds a comma, quote or line break.
 fn csv_field(s: &str) -> String {

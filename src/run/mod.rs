@@ -27,13 +27,13 @@ use std::time::Instant;
 
 use anyhow::{bail, Result};
 
+use crate::fragments::FragmentSummary;
 use crate::gpu::GpuContext;
 use crate::output::manifest::{Manifest, ManifestWriter, Settings};
 use crate::output::{frame_path, FrameWriter};
 use crate::render::Splats;
 use crate::scene::quality::Quality;
 use crate::scene::{BuildReport, CameraPath, Scene};
-use crate::study::fragments::FragmentSummary;
 
 /// Where a run's Gaussians come from.
 #[derive(Clone, Debug, PartialEq)]

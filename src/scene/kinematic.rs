@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3, Vec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::simulation::{ConditionKind, ConditionSpec};
+use super::physics::{ConditionKind, ConditionSpec};
 use super::{Scene, SceneError};
 use crate::render::Splats;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidMotion};

@@ -8,15 +8,16 @@ use glam::Vec3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::path::KeyedPoint;
-use super::simulation::{MaterialSpec, PartKind, SplatPart};
+use super::physics::MaterialSpec;
+use super::simulation::{PartKind, SplatPart};
 use super::{BuildReport, Scene, SceneError};
-use crate::relight::gpu_normals::{spacing_of, RecomputedObject};
+use crate::derive::normals::{spacing_of, RecomputedObject};
 use crate::relight::normals::{pca_normals, DEFAULT_K};
 use crate::relight::shadow::VolumeGrid;
 use crate::relight::{oct_encode, PointLight, ShadingParams, MAX_LIGHTS};
 use crate::render::gpu::lighting::LightingSetup;
 use crate::render::Splats;
+use crate::spline::KeyedPoint;
 
 fn one3() -> [f32; 3] {
     [1.0; 3]
@@ -304,7 +305,7 @@ pub struct SceneLighting {
     /// Seconds spent on PCA normals.
     pub normals_seconds: f64,
     /// The simulated objects' Gaussian ranges whose normals are recomputed every frame
-    /// on the GPU (`relight::gpu_normals`; empty in `transport` mode).
+    /// on the GPU (`derive::normals`; empty in `transport` mode).
     pub recompute: Vec<std::ops::Range<usize>>,
 }
 

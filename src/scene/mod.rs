@@ -12,6 +12,7 @@ pub mod fill;
 pub mod kinematic;
 pub mod lighting;
 pub(crate) mod path;
+pub mod physics;
 pub mod quality;
 pub mod regions;
 pub mod simulation;
@@ -136,7 +137,7 @@ pub struct Scene {
     pub objects: Vec<ObjectSpec>,
     /// The MPM simulation of the objects that have `physics` (see docs/physics.md).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub simulation: Option<simulation::SimulationSpec>,
+    pub simulation: Option<physics::SimulationSpec>,
     /// Relighting: point lights, ambient light, shadows (see docs/relighting.md). Without
     /// it the Gaussians keep their own colours.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -310,7 +311,7 @@ pub struct ObjectSpec {
     pub transform: TransformSpec,
     /// Simulate this object (needs the scene's `simulation` block). Default: static.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub physics: Option<simulation::PhysicsSpec>,
+    pub physics: Option<physics::PhysicsSpec>,
     /// Move on a prescribed rigid path and push the simulated material (a knife, a
     /// projectile). Needs the scene's `simulation` block. Default: none.
     #[serde(default, skip_serializing_if = "Option::is_none")]

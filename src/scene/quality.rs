@@ -9,7 +9,7 @@
 //! simulation's cost as s⁻⁴: `high` is about 16× the simulation work of `standard`.
 //! Nothing else changes: the same objects, materials, paths and lights.
 
-use super::simulation::FillSpec;
+use super::physics::FillSpec;
 use super::{Scene, MAX_IMAGE_SIZE};
 
 /// How finely a scene is resolved.

@@ -6,64 +6,10 @@
 //! wins; particles in no region keep the object's `material`.
 
 use glam::DVec3;
-use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
 
-use super::simulation::{MaterialSpec, SelectSpec};
+use super::physics::{RegionSpec, SelectSpec, ShellRange};
 use super::SceneError;
-use crate::sim::cpu::Material;
-
-/// One entry of `physics.regions`: exactly one selector (`shell`, `box`, `sphere`,
-/// `label`), a `material` and an optional interior `color`.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RegionSpec {
-    /// A name for messages. Default `regions[<index>]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub name: Option<String>,
-    /// Particles whose depth below the object's surface lies in [from, to).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub shell: Option<ShellRange>,
-    /// Particles in the world box lo ≤ x ≤ hi (at the start of the simulation).
-    #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
-    pub box_region: Option<BoxRegion>,
-    /// Particles in the world ball |x − center| ≤ radius.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sphere: Option<SphereRegion>,
-    /// Gaussians carrying this label (fill particles take their nearest Gaussian's label).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub label: Option<String>,
-    /// The region's material (NACC, fixed corotated or Neo-Hookean).
-    pub material: MaterialSpec,
-    /// Colour (linear RGB in [0, 1]) of the region's fill particles. Default: the colour of
-    /// the nearest Gaussian, as without regions.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub color: Option<[f32; 3]>,
-}
-
-/// Depths below the surface, in world units: from ≤ depth < to.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ShellRange {
-    /// Default 0 (the surface).
-    #[serde(default)]
-    pub from: f64,
-    pub to: f64,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct BoxRegion {
-    pub lo: [f64; 3],
-    pub hi: [f64; 3],
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct SphereRegion {
-    pub center: [f64; 3],
-    pub radius: f64,
-}
+use crate::sim::Material;
 
 /// Most regions one object may have (the GPU step holds 16 materials for the whole scene).
 pub const MAX_REGIONS: usize = 15;

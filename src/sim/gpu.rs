@@ -3,8 +3,8 @@
 //! 1. `shaders/sim/step/prepare.wgsl` — per particle: base-cell sort key and the affine
 //!    term m C − Δt V⁰ (4/Δx²) τ(F);
 //! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
-//! 3. `shaders/render/tile_ranges.wgsl` — each cell's run of particles (the renderer's
-//!    tile-range pass: the same job on other keys);
+//! 3. `shaders/gpu/ranges.wgsl` — each cell's run of particles (the GPU primitive the
+//!    renderer also uses for its tiles);
 //! 4. `shaders/sim/step/mark_blocks.wgsl` — blocks of 4³ nodes that an occupied cell's
 //!    stencils reach, listed by `compact_blocks.wgsl` (the node passes run only there);
 //! 5. `shaders/sim/step/p2g.wgsl` — per node of the active blocks: gather mass and momentum from the 27
@@ -32,14 +32,14 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DVec3, Mat3};
 use wgpu::util::DeviceExt;
 
-use super::cpu::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
 use super::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use super::wgsl::{self, NaccMaterialGpu};
+use super::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
+use crate::gpu::buffers::{read_buffer, storage};
+use crate::gpu::ranges::Ranges;
+use crate::gpu::scan::Scan;
+use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::{GpuContext, GpuError, Kernel};
-use crate::render::gpu::passes::TileRanges;
-use crate::render::gpu::radix_sort::{RadixSort, SortBuffers, SortPlan};
-use crate::render::gpu::read_buffer;
-use crate::render::gpu::scan::Scan;
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
@@ -335,7 +335,7 @@ struct Kernels {
     compact_blocks: Kernel,
     p2g: Kernel,
     g2p: Kernel,
-    ranges: TileRanges,
+    ranges: Ranges,
     sort: RadixSort,
     scan: Scan,
 }
@@ -622,14 +622,7 @@ fn init<T: Pod>(gpu: &GpuContext, label: &str, data: &[T], readable: bool) -> wg
 }
 
 fn zeroed(gpu: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
-    gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(256),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    })
+    storage(&gpu.device, label, bytes, wgpu::BufferUsages::empty())
 }
 
 impl GpuSim {
@@ -690,7 +683,7 @@ impl GpuSim {
                 "sim g2p",
                 include_str!("../../shaders/sim/step/g2p.wgsl"),
             ),
-            ranges: TileRanges::new(device),
+            ranges: Ranges::new(device),
             sort: RadixSort::new(device),
             scan: Scan::new(device),
         };

@@ -3,7 +3,7 @@
 //!
 //! A collider is a shape in its own frame ([`ColliderShape`]: sphere, box, or cylinder
 //! along z; signed distance d, outward normal) moved by a [`RigidMotion`]: keyframed
-//! position on the scene's C¹ Hermite spline (`scene::path::KeyedPoint`, as lights and
+//! position on the scene's C¹ Hermite spline (`spline::KeyedPoint`, as lights and
 //! cameras) and Euler angles `rotate_deg` interpolated linearly, the same convention as an
 //! object's transform (R = Rz · Ry · Rx). Velocities are the path's analytic derivatives.
 //!
@@ -11,7 +11,7 @@
 //! collider's frame: the rigid velocity there is v_c = v_lin + ω × (x − c), and
 //! v ← v_c + apply(v − v_c, n) — sticky gives v = v_c; slip removes the normal relative
 //! component, separate only when approaching; Coulomb friction on the relative tangential
-//! part (`cpu::Condition::apply`). Kinematic colliders apply after the planar colliders and
+//! part (`boundary::Condition::apply`). Kinematic colliders apply after the planar colliders and
 //! before the domain walls. A substep uses the pose at its start time.
 //!
 //! The CPU step ([`super::cpu::step_at`]) evaluates the pose every step; the GPU step gets
@@ -20,8 +20,8 @@
 
 use glam::{DMat3, DVec3, Vec3};
 
-use super::cpu::Condition;
-use crate::scene::path::KeyedPoint;
+use super::boundary::Condition;
+use crate::spline::KeyedPoint;
 
 /// The solid, centred on `centre` in the collider's frame (the object frame, scaled).
 #[derive(Clone, Copy, Debug, PartialEq)]

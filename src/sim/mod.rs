@@ -21,18 +21,27 @@
 //! | §4 | case 3: `center`, `continuous{k}`, `closest_point` | [`nacc::Case3Variant`] |
 //! | §4 | back to F (J_E(p), scaled s, det b̄ = 1 solve) and hardening | [`nacc::return_map`] |
 
+pub mod boundary;
 pub mod bspline;
 pub mod cpu;
-pub mod derive;
 pub mod elasticity;
 pub mod frame;
 pub mod gpu;
+pub mod grid;
 pub mod kinematic;
+pub mod material;
 pub mod nacc;
+pub mod params;
+pub mod particles;
 pub mod svd;
 pub mod wgsl;
 
+pub use boundary::{Boundaries, BoundaryKind, Condition, DomainWalls, PlaneCollider, WALL_BAND};
 pub use bspline::Stencil;
 pub use elasticity::{ElasticModel, Lame};
+pub use grid::Grid;
+pub use material::{cfl_dt, Material};
 pub use nacc::{return_map, Case3Variant, NaccParams, PlasticReturn, ReturnCase, YieldEllipse};
+pub use params::{StepParams, StepStats, Transfer};
+pub use particles::{axial, Particles};
 pub use svd::{polar, svd3, Svd3};

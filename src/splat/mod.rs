@@ -153,3 +153,20 @@ impl GaussianCloud {
             .map(|i| i as u16)
     }
 }
+
+/// Upper triangle of a symmetric 3×3 matrix: xx, xy, xz, yy, yz, zz.
+pub type Sym3 = [f32; 6];
+
+pub fn sym3_from_mat3(m: Mat3) -> Sym3 {
+    [
+        m.x_axis.x, m.y_axis.x, m.z_axis.x, m.y_axis.y, m.z_axis.y, m.z_axis.z,
+    ]
+}
+
+pub fn mat3_from_sym3(s: Sym3) -> Mat3 {
+    Mat3::from_cols(
+        Vec3::new(s[0], s[1], s[2]),
+        Vec3::new(s[1], s[3], s[4]),
+        Vec3::new(s[2], s[4], s[5]),
+    )
+}

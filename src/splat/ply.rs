@@ -156,21 +156,14 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
 }
 
 /// Write `cloud` as a standard 3DGS PLY file, atomically (a hidden temporary file, then a
-/// rename: see [`crate::output::write_atomically`]).
+/// rename: see [`crate::files::write_atomically`]).
 pub fn write_ply(path: &Path, cloud: &GaussianCloud, format: PlyFormat) -> Result<(), PlyError> {
     let name = path.display().to_string();
     let bytes = write_ply_bytes(cloud, format, &name)?;
-    crate::output::write_atomically(path, &bytes).map_err(|e| match e {
-        crate::output::OutputError::Write { source, .. } => PlyError::Io {
-            file: name,
-            action: "write the PLY file",
-            source,
-        },
-        other => PlyError::Io {
-            file: name,
-            action: "write the PLY file",
-            source: std::io::Error::other(other.to_string()),
-        },
+    crate::files::write_atomically(path, &bytes).map_err(|source| PlyError::Io {
+        file: name,
+        action: "write the PLY file",
+        source,
     })
 }
 

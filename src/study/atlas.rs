@@ -16,11 +16,11 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::runner::{simulate, Outcome};
-use crate::sim::cpu::{
-    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
-};
 use crate::sim::elasticity::{energy_density, ElasticModel};
 use crate::sim::nacc::{project_pq, ReturnCase};
+use crate::sim::{
+    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
+};
 use crate::sim::{return_map, Case3Variant, NaccParams};
 
 /// Trial pressure fraction (p_tr − p_c)/L_p above which a case-3 return is "near the

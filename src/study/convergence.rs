@@ -27,7 +27,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 use super::runner::{seconds_per_frame, simulate, Outcome};
-use crate::sim::cpu::{
+use crate::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
 };

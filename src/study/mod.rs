@@ -8,7 +8,6 @@ pub mod atlas;
 pub mod chart;
 pub mod convergence;
 pub mod fit;
-pub mod fragments;
 pub mod runner;
 pub mod suite;
 pub mod tables;

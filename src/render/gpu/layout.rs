@@ -58,23 +58,6 @@ pub struct Stats {
     pub intersections: u32,
 }
 
-/// `ScanParams` of `shaders/render/scan.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct ScanParams {
-    pub n: u32,
-    pub _pad: [u32; 3],
-}
-
-/// `SortParams` of `shaders/render/radix_sort.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct SortParams {
-    pub shift: u32,
-    pub num_blocks: u32,
-    pub _pad: [u32; 2],
-}
-
 pub const TILE: u32 = 16;
 
 /// Words of f16-packed SH per Gaussian (48 halves: degree 3, padded).
@@ -199,9 +182,5 @@ mod tests {
                 intersections
             ]
         );
-        let scan = include_str!("../../../shaders/render/scan.wgsl");
-        assert_layout!(scan, ScanParams, "ScanParams", [n]);
-        let sort = include_str!("../../../shaders/render/radix_sort.wgsl");
-        assert_layout!(sort, SortParams, "SortParams", [shift, num_blocks]);
     }
 }

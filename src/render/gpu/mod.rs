@@ -5,7 +5,7 @@
 //! 3. [`passes::TileKeys`] — count, scan and emit one (tile, Gaussian) pair per touched tile,
 //!    in depth order;
 //! 4. [`RadixSort`] — stable sort of the pairs by tile (only the bits the tile count needs);
-//! 5. [`passes::TileRanges`] — start/end of each tile's run;
+//! 5. [`Ranges`] — start/end of each tile's run;
 //! 6. [`passes::Rasterize`] — front-to-back compositing per 16×16 tile.
 //!
 //! With lighting set ([`GpuRenderer::set_lighting`], [`lighting`]), the shadow volume is
@@ -17,18 +17,19 @@
 pub mod layout;
 pub mod lighting;
 pub(crate) mod passes;
-pub mod radix_sort;
-pub mod scan;
 
 use glam::Vec3;
 
+pub use crate::gpu::buffers::read_buffer;
+use crate::gpu::buffers::storage;
+use crate::gpu::ranges::Ranges;
+use crate::gpu::scan::{Scan, ScanPlan};
+use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::{GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
 use lighting::{Lighting, LightingSetup};
-use radix_sort::{RadixSort, SortBuffers, SortPlan};
-use scan::{Scan, ScanPlan};
 
 pub(crate) const COMMON: &str = include_str!("../../../shaders/common.wgsl");
 pub(crate) const SH: &str = include_str!("../../../shaders/sh.wgsl");
@@ -108,7 +109,7 @@ struct Plans {
 pub struct GpuRenderer {
     project: passes::Project,
     tile_keys: passes::TileKeys,
-    tile_ranges: passes::TileRanges,
+    tile_ranges: Ranges,
     rasterize: passes::Rasterize,
     sort: RadixSort,
     scan: Scan,
@@ -131,23 +132,6 @@ struct WarnedOnce {
     overflow: bool,
 }
 
-fn storage(
-    device: &wgpu::Device,
-    label: &str,
-    bytes: u64,
-    extra: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(256),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC
-            | extra,
-        mapped_at_creation: false,
-    })
-}
-
 fn tile_bits(tiles: u32) -> u32 {
     32 - tiles.saturating_sub(1).leading_zeros()
 }
@@ -158,7 +142,7 @@ impl GpuRenderer {
         GpuRenderer {
             project: passes::Project::new(device),
             tile_keys: passes::TileKeys::new(device),
-            tile_ranges: passes::TileRanges::new(device),
+            tile_ranges: Ranges::new(device),
             rasterize: passes::Rasterize::new(device),
             sort: RadixSort::new(device),
             scan: Scan::new(device),
@@ -789,21 +773,4 @@ struct LightingBinds {
     splat: wgpu::BindGroup,
     transmit: wgpu::BindGroup,
     shade: wgpu::BindGroup,
-}
-
-/// Map a MAP_READ buffer, copy its contents out, unmap.
-pub fn read_buffer(gpu: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
-    let slice = buffer.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait()?;
-    rx.recv().expect("map callback runs during poll")?;
-    let data = slice
-        .get_mapped_range()
-        .map_err(|e| GpuError::MapRange(e.to_string()))?
-        .to_vec();
-    buffer.unmap();
-    Ok(data)
 }

@@ -1,4 +1,4 @@
-//! The renderer's own passes (the sort and scan have their own modules). Each type owns the
+//! The renderer's own passes (the sort, scan and ranges are GPU primitives in `crate::gpu`). Each type owns the
 //! pipeline(s) of one WGSL file under `shaders/render/`.
 
 use super::{shader_source, COMMON, SH};
@@ -48,20 +48,6 @@ impl TileKeys {
             ),
             total: Kernel::from_module(device, "tile_keys total", &module, "total"),
             emit: Kernel::from_module(device, "tile_keys emit", &module, "emit"),
-        }
-    }
-}
-
-/// `shaders/render/tile_ranges.wgsl`.
-pub struct TileRanges {
-    pub kernel: Kernel,
-}
-
-impl TileRanges {
-    pub fn new(device: &wgpu::Device) -> TileRanges {
-        let src = include_str!("../../../shaders/render/tile_ranges.wgsl");
-        TileRanges {
-            kernel: Kernel::new(device, "tile_ranges", src, "main"),
         }
     }
 }

@@ -1,18 +1,22 @@
-//! Deforming the Gaussians (docs/method.md §6) on the GPU: `shaders/sim/derive.wgsl` writes each
+//! The derive stage: the simulation's state turned into the renderer's Gaussians, on the
+//! GPU and without a readback. Deforming the Gaussians (docs/method.md §6): `shaders/sim/derive.wgsl` writes each
 //! simulated particle's Gaussian — mean x_p, covariance F A Fᵀ, rest frame rotated by
 //! polar(F) — into the renderer's Gaussian buffer, so a frame goes from simulation to
 //! image without a CPU round trip. [`derive_gaussian`] is the f64 twin the pass is tested
-//! against.
+//! against. Kinematic objects move rigidly ([`RigidDerive`]); simulated objects' normals are
+//! refitted in the deformed configuration by [`normals`].
+
+pub mod normals;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DQuat, DVec3};
 use wgpu::util::DeviceExt;
 
-use super::gpu::GpuSim;
-use super::svd::polar;
 use crate::gpu::{GpuContext, GpuError, Kernel};
-use crate::render::splats::{mat3_from_sym3, Sym3};
 use crate::render::{GpuRenderer, Splats};
+use crate::sim::gpu::GpuSim;
+use crate::sim::svd::polar;
+use crate::splat::{mat3_from_sym3, Sym3};
 
 /// `DeriveParams` of the shader.
 #[repr(C)]
@@ -230,7 +234,7 @@ fn source() -> String {
     [
         crate::render::gpu::COMMON,
         crate::render::gpu::lighting::LIGHTING,
-        super::wgsl::library().as_str(),
+        crate::sim::wgsl::library().as_str(),
         include_str!("../../shaders/sim/derive.wgsl"),
     ]
     .join("\n")

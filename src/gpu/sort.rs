@@ -1,12 +1,22 @@
-//! Stable GPU radix sort of (key, value) pairs (`shaders/render/radix_sort.wgsl`), 4 bits
+//! Stable GPU radix sort of (key, value) pairs (`shaders/gpu/radix_sort.wgsl`), 4 bits
 //! per pass. The number of keys is read on the GPU from a one-element buffer, so a sort
 //! can follow a pass that decides how many keys there are without a CPU round trip.
 
 use wgpu::util::DeviceExt;
 
-use super::layout::SortParams;
+use bytemuck::{Pod, Zeroable};
+
 use super::scan::{Scan, ScanPlan};
-use crate::gpu::Kernel;
+use super::Kernel;
+
+/// `SortParams` of `shaders/gpu/radix_sort.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SortParams {
+    pub shift: u32,
+    pub num_blocks: u32,
+    pub _pad: [u32; 2],
+}
 
 /// Keys per workgroup (`BLOCK` in the shader).
 pub const BLOCK: u32 = 2048;
@@ -56,7 +66,7 @@ impl SortPlan {
 
 impl RadixSort {
     pub fn new(device: &wgpu::Device) -> RadixSort {
-        let src = include_str!("../../../shaders/render/radix_sort.wgsl");
+        let src = include_str!("../../shaders/gpu/radix_sort.wgsl");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("radix_sort"),
             source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -137,5 +147,17 @@ impl RadixSort {
             self.scatter
                 .dispatch(cpass, &pass.scatter_bind, plan.blocks);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn params_match_wgsl() {
+        let src = include_str!("../../shaders/gpu/radix_sort.wgsl");
+        assert_layout!(src, SortParams, "SortParams", [shift, num_blocks]);
     }
 }

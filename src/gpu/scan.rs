@@ -1,10 +1,19 @@
-//! Exclusive prefix sum on the GPU (`shaders/render/scan.wgsl`), in blocks of 1024 with
+//! Exclusive prefix sum on the GPU (`shaders/gpu/scan.wgsl`), in blocks of 1024 with
 //! recursive scans of the block sums.
 
 use wgpu::util::DeviceExt;
 
-use super::layout::ScanParams;
-use crate::gpu::Kernel;
+use bytemuck::{Pod, Zeroable};
+
+use super::Kernel;
+
+/// `ScanParams` of `shaders/gpu/scan.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct ScanParams {
+    pub n: u32,
+    pub _pad: [u32; 3],
+}
 
 pub const BLOCK: u32 = 1024;
 
@@ -27,7 +36,7 @@ pub struct ScanPlan {
 
 impl Scan {
     pub fn new(device: &wgpu::Device) -> Scan {
-        let src = include_str!("../../../shaders/render/scan.wgsl");
+        let src = include_str!("../../shaders/gpu/scan.wgsl");
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("scan"),
             source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -96,5 +105,17 @@ impl Scan {
             self.add_offsets
                 .dispatch(cpass, &level.add_bind, level.blocks);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn params_match_wgsl() {
+        let src = include_str!("../../shaders/gpu/scan.wgsl");
+        assert_layout!(src, ScanParams, "ScanParams", [n]);
     }
 }

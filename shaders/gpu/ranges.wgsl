@@ -1,5 +1,6 @@
-// Tile ranges: after the sort by tile, each tile's pairs are contiguous; find the start and
-// end (exclusive) of every tile's run. Tiles with no pair keep the cleared (0, 0).
+// Key ranges: after a sort by key (a tile, a grid cell), the entries of each key are
+// contiguous; find the start and end (exclusive) of every key's run. Keys with no entry keep
+// the cleared (0, 0).
 
 @group(0) @binding(0) var<storage, read> key_count: array<u32>;
 @group(0) @binding(1) var<storage, read> tile_keys: array<u32>;

@@ -1,21 +1,21 @@
 //! PCA normals on the GPU, in the deformed configuration (`lighting.simulated_normals =
 //! "recompute"`): the simulated Gaussians are hashed into a uniform grid
-//! (`shaders/relight/normals_keys.wgsl`), sorted by cell (the renderer's [`RadixSort`]),
-//! the cells' runs found ([`TileRanges`]), and each Gaussian's normal refitted from the
+//! (`shaders/relight/normals_keys.wgsl`), sorted by cell (the GPU primitive [`RadixSort`]),
+//! the cells' runs found ([`Ranges`]), and each Gaussian's normal refitted from the
 //! same object's centres within a radius (`normals_pca.wgsl`) — written straight into the
 //! renderer's shading records, with no readback. The CPU twin is
-//! [`super::normals::pca_normals`] (k nearest instead of a radius).
+//! [`crate::relight::normals::pca_normals`] (k nearest instead of a radius).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::ops::Range;
 use wgpu::util::DeviceExt;
 
+use crate::gpu::ranges::Ranges;
+use crate::gpu::scan::Scan;
+use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::gpu::lighting::LIGHTING;
-use crate::render::gpu::passes::TileRanges;
-use crate::render::gpu::radix_sort::{RadixSort, SortBuffers, SortPlan};
-use crate::render::gpu::scan::Scan;
 use crate::render::gpu::COMMON;
 use crate::render::GpuRenderer;
 use crate::sim::wgsl;
@@ -71,7 +71,7 @@ pub struct RecomputedObject {
 pub struct GpuNormals {
     keys: Kernel,
     pca: Kernel,
-    tile_ranges: TileRanges,
+    tile_ranges: Ranges,
     sort: RadixSort,
     scan: Scan,
     plan: SortPlan,
@@ -84,14 +84,7 @@ pub struct GpuNormals {
 }
 
 fn storage(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: bytes.max(256),
-        usage: wgpu::BufferUsages::STORAGE
-            | wgpu::BufferUsages::COPY_DST
-            | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    })
+    crate::gpu::buffers::storage(device, label, bytes, wgpu::BufferUsages::empty())
 }
 
 impl GpuNormals {
@@ -195,7 +188,7 @@ impl GpuNormals {
             &source(include_str!("../../shaders/relight/normals_pca.wgsl")),
             "main",
         );
-        let tile_ranges = TileRanges::new(device);
+        let tile_ranges = Ranges::new(device);
         let keys_bind = keys_kernel.bind(device, &[&params_buf, gaussians, &keys, &values]);
         let ranges_bind = tile_ranges
             .kernel

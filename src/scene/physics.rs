@@ -1,0 +1,450 @@
+//! The scene file's physics: the `simulation` block (grid, step, gravity, boundaries) and
+//! each object's `physics` (material, selection, fill, regions), as serde types with their
+//! validation and their conversion to the simulation's types. `scene::simulation` turns
+//! them into particles, `scene::regions` into materials per particle.
+
+use glam::DVec3;
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::SceneError;
+use crate::sim::nacc::{m_from_friction_angle, Case3Variant, NaccParams};
+use crate::sim::{BoundaryKind, Condition, Material};
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.8]
+}
+fn default_cfl() -> f64 {
+    0.4
+}
+
+/// The `simulation` block.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Grid spacing Δx.
+    pub dx: f64,
+    /// Step Δt in seconds. Default: from the CFL condition Δt = cfl · Δx / c over the
+    /// materials (c = sqrt((λ + 2μ)/ρ)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// CFL number for the default Δt (and the check of a given one). Default 0.4.
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+    /// The simulated box: only what moves is gridded.
+    pub domain: DomainSpec,
+    /// Default [0, 0, −9.8] (z up).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Condition on the domain's faces. Default `separate`, no friction.
+    #[serde(default)]
+    pub walls: ConditionSpec,
+    /// Condition on the bottom face (−z) only, e.g. a frictional or sticky ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<ConditionSpec>,
+    /// Planar colliders (at most 8).
+    #[serde(default)]
+    pub colliders: Vec<ColliderSpec>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DomainSpec {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+/// `sticky` (v = 0), `slip` (normal velocity removed) or `separate` (only the velocity into
+/// the obstacle removed), with Coulomb friction on the tangential part.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ConditionSpec {
+    pub kind: ConditionKind,
+    #[serde(default)]
+    pub friction: f64,
+}
+
+impl Default for ConditionSpec {
+    fn default() -> Self {
+        ConditionSpec {
+            kind: ConditionKind::Separate,
+            friction: 0.0,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ConditionKind {
+    Sticky,
+    Slip,
+    Separate,
+}
+
+/// The solid half-space (x − point)·normal ≤ 0.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderSpec {
+    pub point: [f64; 3],
+    /// Outward normal (normalised on use).
+    pub normal: [f64; 3],
+    #[serde(flatten)]
+    pub condition: ConditionSpec,
+}
+
+/// An object's `physics`: it is simulated, with this material and initial motion.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct PhysicsSpec {
+    pub material: MaterialSpec,
+    /// Initial velocity. Default 0.
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    /// Initial angular velocity (rad/s) about the object's centre of mass. Default 0.
+    #[serde(default)]
+    pub angular_velocity: [f64; 3],
+    /// Which Gaussians move: those whose mean lies in this region (world coordinates, after
+    /// the object's transform). Default: the whole object. The rest stays static.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub select: Option<SelectSpec>,
+    /// Gaussians with a lower opacity stay static (rendered, not simulated). Default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub min_opacity: f64,
+    /// Interior filling (`scene::fill`): `true` (spacing Δx/2), `false`, or
+    /// `{"spacing": h}`. Default off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fill: Option<FillSpec>,
+    /// Material regions (`scene::regions`): the first region a particle lies in gives its
+    /// material (and its fill colour); particles in none keep `material`. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub regions: Vec<RegionSpec>,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
+/// A region of the world selecting what moves.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum SelectSpec {
+    /// The axis-aligned box lo ≤ x ≤ hi.
+    Box { lo: [f64; 3], hi: [f64; 3] },
+    /// The ball |x − center| ≤ radius.
+    Sphere { center: [f64; 3], radius: f64 },
+}
+
+impl SelectSpec {
+    pub(crate) fn validate(&self, origin: &str, field: &str) -> Result<(), SceneError> {
+        match self {
+            SelectSpec::Box { lo, hi } => {
+                let (lo, hi) = (vec3(*lo), vec3(*hi));
+                if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.box"),
+                        format!("{lo} .. {hi}"),
+                        "finite lo < hi on every axis",
+                    ));
+                }
+            }
+            SelectSpec::Sphere { center, radius } => {
+                if !vec3(*center).is_finite() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.sphere.center"),
+                        vec3(*center),
+                        "a finite point",
+                    ));
+                }
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.sphere.radius"),
+                        radius,
+                        "a radius > 0",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the point lies in the region (boundary included).
+    pub fn contains(&self, p: DVec3) -> bool {
+        match self {
+            SelectSpec::Box { lo, hi } => p.cmpge(vec3(*lo)).all() && p.cmple(vec3(*hi)).all(),
+            SelectSpec::Sphere { center, radius } => {
+                p.distance_squared(vec3(*center)) <= radius * radius
+            }
+        }
+    }
+}
+
+/// `physics.fill`: `true` / `false`, or options.
+#[derive(Clone, Debug, Serialize, JsonSchema, PartialEq)]
+#[serde(untagged)]
+pub enum FillSpec {
+    /// `true`: fill at spacing Δx/2 (8 particles per cell); `false`: no filling.
+    Enabled(bool),
+    Options(FillOptions),
+}
+
+#[derive(Clone, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FillOptions {
+    /// Particle spacing h of the fill, in [Δx/16, Δx]. Default Δx/2.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing: Option<f64>,
+}
+
+impl<'de> Deserialize<'de> for FillSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::Bool(b) => Ok(FillSpec::Enabled(b)),
+            v @ serde_json::Value::Object(_) => serde_json::from_value::<FillOptions>(v)
+                .map(FillSpec::Options)
+                .map_err(|e| D::Error::custom(format!("physics.fill: {e}"))),
+            other => Err(D::Error::custom(format!(
+                "physics.fill: expected true, false or {{\"spacing\": h}}, got {other}"
+            ))),
+        }
+    }
+}
+
+impl FillSpec {
+    /// The fill spacing for grid spacing `dx`, or None when filling is off.
+    pub(super) fn spacing(&self, dx: f64) -> Option<f64> {
+        match self {
+            FillSpec::Enabled(false) => None,
+            FillSpec::Enabled(true) => Some(0.5 * dx),
+            FillSpec::Options(o) => Some(o.spacing.unwrap_or(0.5 * dx)),
+        }
+    }
+}
+
+/// A material (docs/method.md §3–§4, parameters as in the paper's table).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum MaterialSpec {
+    /// Elastic, fixed corotated.
+    FixedCorotated {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    /// Elastic, Neo-Hookean (Borden).
+    NeoHookean {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+    },
+    /// CD-MPM: Non-Associated Cam-Clay on Neo-Hookean, with hardening.
+    Nacc {
+        #[serde(rename = "E")]
+        e: f64,
+        nu: f64,
+        density: f64,
+        alpha0: f64,
+        beta: f64,
+        xi: f64,
+        /// Slope M of the critical-state line (or give `friction_angle_deg`).
+        #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
+        m_slope: Option<f64>,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        friction_angle_deg: Option<f64>,
+        /// Case-3 return mapping: `center`, `continuous` (default) or `closest_point`.
+        #[serde(default = "default_mapping")]
+        return_mapping: ReturnMappingSpec,
+        /// Exponent k of the `continuous` mapping. Default 2.
+        #[serde(default = "default_k")]
+        k: f64,
+    },
+}
+
+fn default_mapping() -> ReturnMappingSpec {
+    ReturnMappingSpec::Continuous
+}
+fn default_k() -> f64 {
+    2.0
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ReturnMappingSpec {
+    Center,
+    Continuous,
+    ClosestPoint,
+}
+
+impl MaterialSpec {
+    pub fn density(&self) -> f64 {
+        match self {
+            MaterialSpec::FixedCorotated { density, .. }
+            | MaterialSpec::NeoHookean { density, .. }
+            | MaterialSpec::Nacc { density, .. } => *density,
+        }
+    }
+
+    /// Check the values and build the material; `field` names it in errors.
+    pub fn build(&self, origin: &str, field: &str) -> Result<Material, SceneError> {
+        let bad = |name: &str, v: f64, expected: &str| {
+            SceneError::invalid(origin, format!("{field}.{name}"), v, expected)
+        };
+        let (e, nu, density) = match self {
+            MaterialSpec::FixedCorotated { e, nu, density }
+            | MaterialSpec::NeoHookean { e, nu, density }
+            | MaterialSpec::Nacc { e, nu, density, .. } => (*e, *nu, *density),
+        };
+        if !(e.is_finite() && e > 0.0) {
+            return Err(bad("E", e, "Young's modulus > 0"));
+        }
+        if !(nu.is_finite() && nu > -1.0 && nu < 0.5) {
+            return Err(bad("nu", nu, "a Poisson ratio in (−1, 0.5)"));
+        }
+        if !(density.is_finite() && density > 0.0) {
+            return Err(bad("density", density, "a density > 0"));
+        }
+        Ok(match self {
+            MaterialSpec::FixedCorotated { .. } => Material::fixed_corotated(e, nu),
+            MaterialSpec::NeoHookean { .. } => Material::neo_hookean(e, nu),
+            MaterialSpec::Nacc {
+                alpha0,
+                beta,
+                xi,
+                m_slope,
+                friction_angle_deg,
+                return_mapping,
+                k,
+                ..
+            } => {
+                let m_slope = match (m_slope, friction_angle_deg) {
+                    (Some(m), None) if m.is_finite() && *m > 0.0 => *m,
+                    (Some(m), None) => return Err(bad("M", *m, "a slope > 0")),
+                    (None, Some(phi)) if phi.is_finite() && *phi > 0.0 && *phi < 90.0 => {
+                        m_from_friction_angle(phi.to_radians())
+                    }
+                    (None, Some(phi)) => {
+                        return Err(bad("friction_angle_deg", *phi, "an angle in (0, 90)"))
+                    }
+                    _ => {
+                        return Err(SceneError::invalid(
+                            origin,
+                            field.to_string(),
+                            "M and friction_angle_deg",
+                            "exactly one of `M` or `friction_angle_deg`",
+                        ))
+                    }
+                };
+                for (name, v, ok) in [
+                    ("alpha0", *alpha0, alpha0.is_finite()),
+                    ("beta", *beta, beta.is_finite() && *beta >= 0.0),
+                    ("xi", *xi, xi.is_finite() && *xi >= 0.0),
+                    ("k", *k, k.is_finite() && *k > 0.0),
+                ] {
+                    if !ok {
+                        return Err(bad(name, v, "a finite value (β, ξ ≥ 0; k > 0)"));
+                    }
+                }
+                let variant = match return_mapping {
+                    ReturnMappingSpec::Center => Case3Variant::Center,
+                    ReturnMappingSpec::Continuous => Case3Variant::Continuous { k: *k },
+                    ReturnMappingSpec::ClosestPoint => Case3Variant::ClosestPoint,
+                };
+                Material::Nacc {
+                    params: NaccParams {
+                        e,
+                        nu,
+                        alpha0: *alpha0,
+                        beta: *beta,
+                        xi: *xi,
+                        m_slope,
+                    },
+                    variant,
+                }
+            }
+        })
+    }
+}
+
+impl ConditionSpec {
+    pub(super) fn build(&self, origin: &str, field: &str) -> Result<Condition, SceneError> {
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return Err(SceneError::invalid(
+                origin,
+                format!("{field}.friction"),
+                self.friction,
+                "a friction coefficient ≥ 0",
+            ));
+        }
+        let kind = match self.kind {
+            ConditionKind::Sticky => BoundaryKind::Sticky,
+            ConditionKind::Slip => BoundaryKind::Slip,
+            ConditionKind::Separate => BoundaryKind::Separate,
+        };
+        Ok(Condition {
+            kind,
+            friction: self.friction,
+        })
+    }
+}
+
+/// One entry of `physics.regions`: exactly one selector (`shell`, `box`, `sphere`,
+/// `label`), a `material` and an optional interior `color`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// A name for messages. Default `regions[<index>]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Particles whose depth below the object's surface lies in [from, to).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shell: Option<ShellRange>,
+    /// Particles in the world box lo ≤ x ≤ hi (at the start of the simulation).
+    #[serde(rename = "box", default, skip_serializing_if = "Option::is_none")]
+    pub box_region: Option<BoxRegion>,
+    /// Particles in the world ball |x − center| ≤ radius.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sphere: Option<SphereRegion>,
+    /// Gaussians carrying this label (fill particles take their nearest Gaussian's label).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// The region's material (NACC, fixed corotated or Neo-Hookean).
+    pub material: MaterialSpec,
+    /// Colour (linear RGB in [0, 1]) of the region's fill particles. Default: the colour of
+    /// the nearest Gaussian, as without regions.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub color: Option<[f32; 3]>,
+}
+
+/// Depths below the surface, in world units: from ≤ depth < to.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShellRange {
+    /// Default 0 (the surface).
+    #[serde(default)]
+    pub from: f64,
+    pub to: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BoxRegion {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SphereRegion {
+    pub center: [f64; 3],
+    pub radius: f64,
+}
+
+/// A scene file's `[x, y, z]`.
+pub(super) fn vec3(v: [f64; 3]) -> DVec3 {
+    DVec3::from_array(v)
+}

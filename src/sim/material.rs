@@ -1,0 +1,86 @@
+//! The materials a particle can have (docs/method.md §3–§4): an elastic model, or NACC
+//! plasticity on top of Neo-Hookean. Shared by the CPU reference step, the GPU step and
+//! the scene setup.
+
+use glam::DMat3;
+
+use super::elasticity::{kirchhoff, ElasticModel, Lame};
+use super::nacc::{return_map, Case3Variant, NaccParams};
+
+/// A material: an elastic model, or NACC plasticity on top of Neo-Hookean (docs/method.md §3–§4).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Material {
+    /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I; no plasticity.
+    FixedCorotated { lame: Lame },
+    /// Borden Neo-Hookean τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I; no plasticity. Needs
+    /// det F > 0 (an inverted F gives NaN, which [`check`] reports).
+    NeoHookean { lame: Lame },
+    /// Neo-Hookean stress with the NACC return mapping and hardening after each F update.
+    Nacc {
+        params: NaccParams,
+        variant: Case3Variant,
+    },
+}
+
+impl Material {
+    /// Fixed corotated from Young's modulus and Poisson ratio.
+    pub fn fixed_corotated(e: f64, nu: f64) -> Self {
+        Material::FixedCorotated {
+            lame: Lame::from_young_poisson(e, nu),
+        }
+    }
+
+    /// Neo-Hookean (Borden) from Young's modulus and Poisson ratio.
+    pub fn neo_hookean(e: f64, nu: f64) -> Self {
+        Material::NeoHookean {
+            lame: Lame::from_young_poisson(e, nu),
+        }
+    }
+
+    /// Lamé parameters of the elastic part.
+    pub fn lame(&self) -> Lame {
+        match self {
+            Material::FixedCorotated { lame } | Material::NeoHookean { lame } => *lame,
+            Material::Nacc { params, .. } => params.lame(),
+        }
+    }
+
+    /// P-wave modulus λ + 2μ (CFL sound speed c = sqrt((λ + 2μ)/ρ)).
+    pub fn p_wave_modulus(&self) -> f64 {
+        self.lame().p_wave_modulus()
+    }
+
+    /// α a fresh particle starts with: α₀ for NACC, 0 otherwise (unused there).
+    pub fn initial_alpha(&self) -> f64 {
+        match self {
+            Material::Nacc { params, .. } => params.alpha0,
+            _ => 0.0,
+        }
+    }
+
+    /// Kirchhoff stress τ(F) (docs/method.md §3).
+    pub fn kirchhoff(&self, f: DMat3) -> DMat3 {
+        match self {
+            Material::FixedCorotated { lame } => kirchhoff(ElasticModel::FixedCorotated, f, lame),
+            Material::NeoHookean { lame } => kirchhoff(ElasticModel::NeoHookean, f, lame),
+            Material::Nacc { params, .. } => kirchhoff(ElasticModel::NeoHookean, f, &params.lame()),
+        }
+    }
+
+    /// The plastic step after the F update: (F, α) unchanged for the elastic models, the
+    /// NACC return mapping (docs/method.md §4) otherwise.
+    pub fn plasticity(&self, f_trial: DMat3, alpha: f64) -> (DMat3, f64) {
+        match self {
+            Material::Nacc { params, variant } => {
+                let r = return_map(f_trial, alpha, params, *variant);
+                (r.f, r.alpha)
+            }
+            _ => (f_trial, alpha),
+        }
+    }
+}
+
+/// Δt = CFL · Δx / c with c = sqrt((λ + 2μ)/ρ) (docs/method.md §2; CFL ≈ 0.3–0.6).
+pub fn cfl_dt(material: &Material, density: f64, dx: f64, cfl: f64) -> f64 {
+    cfl * dx / (material.p_wave_modulus() / density).sqrt()
+}
