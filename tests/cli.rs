@@ -733,13 +733,135 @@ fn schema_is_json_with_properties() {
     }
 }
 
+/// `splatter info` lists the adapters, best first, four lines each (name, device type and
+/// backend; driver; optional features; key limits), and the one marked chosen is the one a
+/// run opens, with the features and limits it has. CI always has lavapipe, so the test asks
+/// for an adapter: the no-adapter message (which also contains "adapter") fails it.
 #[test]
 fn info_names_an_adapter() {
     let dir = workdir();
     let out = splatter(dir.path(), &["info"]);
     expect_success(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("adapter"), "{}", describe(&out));
+    assert!(
+        !stdout.contains("no GPU adapter found"),
+        "CI has lavapipe, so `info` should list it:\n{}",
+        describe(&out)
+    );
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(
+        !lines.is_empty() && lines.len().is_multiple_of(4),
+        "four lines per adapter:\n{}",
+        describe(&out)
+    );
+    // Block i: `adapter i: NAME (DEVICE TYPE, BACKEND)` (`  <- chosen` on the first),
+    // `  driver: …`, `  features: …`, `  limits: …`.
+    let mut chosen = None;
+    for (i, block) in lines.chunks(4).enumerate() {
+        let head = block[0]
+            .strip_prefix(&format!("adapter {i}: "))
+            .unwrap_or_else(|| panic!("adapter line {i}: {}", block[0]));
+        let (description, is_chosen) = match head.strip_suffix("  <- chosen") {
+            Some(d) => (d, true),
+            None => (head, false),
+        };
+        assert_eq!(
+            is_chosen,
+            i == 0,
+            "only the first adapter is chosen: {head}"
+        );
+        let (name, kind) = description
+            .rsplit_once(" (")
+            .unwrap_or_else(|| panic!("`NAME (TYPE, BACKEND)`: {description}"));
+        let (device_type, backend) = kind
+            .strip_suffix(')')
+            .and_then(|k| k.split_once(", "))
+            .unwrap_or_else(|| panic!("`(TYPE, BACKEND)`: {description}"));
+        assert!(!name.trim().is_empty(), "an adapter name: {description}");
+        assert!(
+            ["DiscreteGpu", "IntegratedGpu", "VirtualGpu", "Cpu", "Other"].contains(&device_type),
+            "a wgpu device type: {description}"
+        );
+        assert!(
+            ["Vulkan", "Metal", "Dx12", "Gl", "BrowserWebGpu"].contains(&backend),
+            "a wgpu backend: {description}"
+        );
+        assert!(block[1].starts_with("  driver: "), "{}", block[1]);
+        let features = info_fields(
+            block[2],
+            "  features: ",
+            &["f32 atomics", "subgroups", "timestamps"],
+        );
+        assert!(
+            features.iter().all(|f| f == "yes" || f == "no"),
+            "{}",
+            block[2]
+        );
+        let limits = info_fields(
+            block[3],
+            "  limits: ",
+            &[
+                "storage binding",
+                "buffer",
+                "workgroup storage",
+                "invocations/workgroup",
+                "workgroups/dimension",
+            ],
+        );
+        let limits: Vec<u64> = limits
+            .iter()
+            .zip(["MiB", "MiB", "KiB", "", ""])
+            .map(|(v, unit)| {
+                let n = v.strip_suffix(unit).unwrap_or(v).trim();
+                n.parse()
+                    .unwrap_or_else(|_| panic!("a number of {unit}: {v:?} in {}", block[3]))
+            })
+            .collect();
+        assert!(limits.iter().all(|&n| n > 0), "{}", block[3]);
+        if i == 0 {
+            chosen = Some((description.to_string(), features, limits));
+        }
+    }
+    // The chosen adapter is the one a run opens, with its features and limits.
+    let gpu = splatter::gpu::GpuContext::new(None).expect("an adapter");
+    let (description, features, limits) = chosen.unwrap();
+    assert_eq!(description, gpu.describe());
+    let yes = |b: bool| if b { "yes" } else { "no" };
+    let f = gpu.features;
+    assert_eq!(
+        features,
+        [yes(f.float32_atomics), yes(f.subgroups), yes(f.timestamps)]
+    );
+    let l = &gpu.limits;
+    assert_eq!(
+        limits,
+        [
+            l.max_storage_buffer_binding_size >> 20,
+            l.max_buffer_size >> 20,
+            u64::from(l.max_compute_workgroup_storage_size >> 10),
+            u64::from(l.max_compute_invocations_per_workgroup),
+            u64::from(l.max_compute_workgroups_per_dimension),
+        ]
+    );
+}
+
+/// `line` is `prefix` then `NAME VALUE` pairs separated by `, `, with these names in this
+/// order; returns the values.
+fn info_fields(line: &str, prefix: &str, names: &[&str]) -> Vec<String> {
+    let rest = line
+        .strip_prefix(prefix)
+        .unwrap_or_else(|| panic!("{prefix:?}: {line}"));
+    let parts: Vec<&str> = rest.split(", ").collect();
+    assert_eq!(parts.len(), names.len(), "{line}");
+    parts
+        .iter()
+        .zip(names)
+        .map(|(part, name)| {
+            part.strip_prefix(&format!("{name} "))
+                .unwrap_or_else(|| panic!("{name:?} in {line}"))
+                .to_string()
+        })
+        .collect()
 }
 
 #[test]
