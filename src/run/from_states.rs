@@ -7,12 +7,12 @@ use std::time::Instant;
 use anyhow::Result;
 use glam::Vec3;
 
-use super::{check_manifest_for_resume, create_dir, Event, Job, Summary};
+use super::{check_manifest_for_resume, create_dir, Event, Job, Sink, Summary};
 use crate::checkpoint;
 use crate::gpu::GpuContext;
 use crate::limits;
-use crate::output::manifest::{manifest_path, FrameTiming, ManifestWriter, Settings};
-use crate::output::{frame_path, FrameWriter};
+use crate::output::frame_path;
+use crate::output::manifest::{manifest_path, FrameTiming, Settings};
 use crate::render::{GpuRenderer, Splats};
 
 pub(super) fn execute(
@@ -54,56 +54,31 @@ pub(super) fn execute(
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
-    let workers = FrameWriter::default_workers();
     let mut frames = StateFrames {
         job: &job,
         gpu,
         states,
-        dir: &dir,
         renderer: GpuRenderer::new(gpu),
-        writer: FrameWriter::new(workers, 2 * workers),
-        manifest: &mut manifest,
-        rendered: 0,
-        gpu_ms: 0.0,
+        sink: Sink::new(dir, manifest),
     };
-    let render_start = Instant::now();
     on_event(Event::Frames(job.frames.clone()));
     let result = frames.run(on_event);
-    let StateFrames {
-        writer,
-        rendered,
-        gpu_ms,
-        ..
-    } = frames;
-    job.finish(result, writer, &mut manifest, &dir, on_event)?;
-    Ok(Summary {
-        rendered,
-        render_seconds: render_start.elapsed().as_secs_f64(),
-        total_seconds: job.started.elapsed().as_secs_f64(),
-        gpu_ms,
-        png_workers: workers,
-        manifest: manifest.path().to_path_buf(),
-        fragments: Vec::new(),
-    })
+    job.finish(result, frames.sink, Vec::new(), on_event)
 }
 
 struct StateFrames<'a> {
     job: &'a Job,
     gpu: &'a GpuContext,
     states: &'a Path,
-    dir: &'a Path,
     renderer: GpuRenderer,
-    writer: FrameWriter,
-    manifest: &'a mut ManifestWriter,
-    rendered: u32,
-    gpu_ms: f64,
+    sink: Sink,
 }
 
 impl StateFrames<'_> {
     fn run(&mut self, on_event: &mut dyn FnMut(Event)) -> Result<()> {
         for frame in self.job.frames.clone() {
             on_event(Event::FrameStart(frame));
-            if self.job.opts.resume && frame_path(self.dir, frame).is_file() {
+            if self.job.opts.resume && frame_path(&self.sink.dir, frame).is_file() {
                 on_event(Event::FrameDone {
                     frame,
                     skipped: true,
@@ -143,23 +118,12 @@ impl StateFrames<'_> {
         let (image, timings) =
             self.renderer
                 .render_timed(gpu, &self.job.path.camera(frame), background)?;
-        self.gpu_ms += timings.render_ms + timings.readback_ms;
-        self.writer.submit(
-            frame_path(self.dir, frame),
-            image.width,
-            image.height,
-            image.rgba,
-        )?;
-        self.manifest.frame_done(
-            frame,
-            FrameTiming {
-                simulate_ms: 0.0,
-                load_ms: Some(load_ms),
-                render_ms: t1.elapsed().as_secs_f64() * 1e3,
-                gpu_ms: timings.render_ms + timings.readback_ms,
-            },
-        )?;
-        self.rendered += 1;
-        Ok(())
+        let timing = FrameTiming {
+            simulate_ms: 0.0,
+            load_ms: Some(load_ms),
+            render_ms: t1.elapsed().as_secs_f64() * 1e3,
+            gpu_ms: 0.0,
+        };
+        self.sink.submit(frame, image, &timings, timing)
     }
 }

@@ -29,8 +29,9 @@ use anyhow::{bail, Result};
 
 use crate::fragments::FragmentSummary;
 use crate::gpu::GpuContext;
-use crate::output::manifest::{Manifest, ManifestWriter, Settings};
+use crate::output::manifest::{FrameTiming, Manifest, ManifestWriter, Settings};
 use crate::output::{frame_path, FrameWriter};
+use crate::render::gpu::{FrameTimings, RenderedImage};
 use crate::render::Splats;
 use crate::scene::quality::Quality;
 use crate::scene::{BuildReport, CameraPath, Scene};
@@ -149,12 +150,7 @@ impl Summary {
 
 /// A prepared run: the scene loaded and built on the CPU, nothing on the GPU yet.
 pub struct Run {
-    opts: RunOptions,
-    started: Instant,
-    ffmpeg: Option<PathBuf>,
-    scene: Scene,
-    path: CameraPath,
-    frames: Range<u32>,
+    job: Job,
     source: Source,
 }
 
@@ -186,38 +182,6 @@ impl Run {
                 (scene, path, frames, Source::Built { splats, report })
             }
         };
-        Ok(Run {
-            opts,
-            started,
-            ffmpeg,
-            scene,
-            path,
-            frames,
-            source,
-        })
-    }
-
-    /// The scene as prepared (quality and overrides applied).
-    pub fn scene(&self) -> &Scene {
-        &self.scene
-    }
-
-    /// The frames this run renders.
-    pub fn frames(&self) -> Range<u32> {
-        self.frames.clone()
-    }
-
-    /// Run every frame on `gpu`, reporting progress to `on_event`.
-    pub fn execute(self, gpu: &GpuContext, on_event: &mut dyn FnMut(Event)) -> Result<Summary> {
-        let Run {
-            opts,
-            started,
-            ffmpeg,
-            scene,
-            path,
-            frames,
-            source,
-        } = self;
         let job = Job {
             opts,
             started,
@@ -226,6 +190,22 @@ impl Run {
             path,
             frames,
         };
+        Ok(Run { job, source })
+    }
+
+    /// The scene as prepared (quality and overrides applied).
+    pub fn scene(&self) -> &Scene {
+        &self.job.scene
+    }
+
+    /// The frames this run renders.
+    pub fn frames(&self) -> Range<u32> {
+        self.job.frames.clone()
+    }
+
+    /// Run every frame on `gpu`, reporting progress to `on_event`.
+    pub fn execute(self, gpu: &GpuContext, on_event: &mut dyn FnMut(Event)) -> Result<Summary> {
+        let Run { job, source } = self;
         match source {
             Source::Built { splats, report } => {
                 scene_run::execute(job, splats, report, gpu, on_event)
@@ -287,16 +267,24 @@ impl Job {
         ManifestWriter::new(path, m, self.started)
     }
 
-    /// After the frame loop: wait for the writer, record the outcome in the manifest, and
-    /// assemble the video.
+    /// After the frame loop: wait for the writer, record the outcome in the manifest,
+    /// assemble the video, and sum up.
     fn finish(
         &self,
         result: Result<()>,
-        writer: FrameWriter,
-        manifest: &mut ManifestWriter,
-        dir: &Path,
+        sink: Sink,
+        fragments: Vec<(String, u32, FragmentSummary)>,
         on_event: &mut dyn FnMut(Event),
-    ) -> Result<()> {
+    ) -> Result<Summary> {
+        let Sink {
+            dir,
+            writer,
+            mut manifest,
+            rendered,
+            gpu_ms,
+            workers,
+            loop_started,
+        } = sink;
         let result = result.and_then(|()| writer.finish().map(|_| ()).map_err(Into::into));
         on_event(Event::FramesWritten);
         if let Err(e) = result {
@@ -309,7 +297,7 @@ impl Job {
             on_event(Event::Note(format!("video: {} (ffmpeg)", video.display())));
             let fps = self.scene.output.fps;
             if let Err(e) =
-                crate::output::video::assemble(ffmpeg, dir, self.frames.clone(), fps, video)
+                crate::output::video::assemble(ffmpeg, &dir, self.frames.clone(), fps, video)
             {
                 let e = anyhow::Error::from(e);
                 let _ = manifest.finish(Some(one_line(&e)));
@@ -317,6 +305,60 @@ impl Job {
             }
         }
         manifest.finish(None)?;
+        Ok(Summary {
+            rendered,
+            render_seconds: loop_started.elapsed().as_secs_f64(),
+            total_seconds: self.started.elapsed().as_secs_f64(),
+            gpu_ms,
+            png_workers: workers,
+            manifest: manifest.path().to_path_buf(),
+            fragments,
+        })
+    }
+}
+
+/// Where rendered frames go: PNGs through the writer threads, timings into the manifest,
+/// and the counts the summary reports.
+struct Sink {
+    dir: PathBuf,
+    writer: FrameWriter,
+    manifest: ManifestWriter,
+    rendered: u32,
+    gpu_ms: f64,
+    workers: usize,
+    loop_started: Instant,
+}
+
+impl Sink {
+    fn new(dir: PathBuf, manifest: ManifestWriter) -> Sink {
+        let workers = FrameWriter::default_workers();
+        Sink {
+            dir,
+            writer: FrameWriter::new(workers, 2 * workers),
+            manifest,
+            rendered: 0,
+            gpu_ms: 0.0,
+            workers,
+            loop_started: Instant::now(),
+        }
+    }
+
+    /// Queue frame `frame`'s PNG and record its timings (GPU time from `gpu`).
+    fn submit(
+        &mut self,
+        frame: u32,
+        image: RenderedImage,
+        gpu: &FrameTimings,
+        mut timing: FrameTiming,
+    ) -> Result<()> {
+        let gpu_ms = gpu.render_ms + gpu.readback_ms;
+        self.gpu_ms += gpu_ms;
+        timing.gpu_ms = gpu_ms;
+        let path = frame_path(&self.dir, frame);
+        self.writer
+            .submit(path, image.width, image.height, image.rgba)?;
+        self.manifest.frame_done(frame, timing)?;
+        self.rendered += 1;
         Ok(())
     }
 }

@@ -7,14 +7,13 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 use glam::{DVec3, Vec3};
 
-use super::{check_manifest_for_resume, create_dir, Event, FragmentLog, Job, Summary};
+use super::{check_manifest_for_resume, create_dir, Event, FragmentLog, Job, Sink, Summary};
 use crate::checkpoint::{self, checkpoint_path, Checkpoint};
 use crate::derive::normals::GpuNormals;
 use crate::derive::{Derive, RigidDerive};
 use crate::gpu::GpuContext;
 use crate::limits;
-use crate::output::manifest::{manifest_path, FrameTiming, ManifestWriter, Settings};
-use crate::output::{frame_path, FrameWriter};
+use crate::output::manifest::{manifest_path, FrameTiming, Settings};
 use crate::render::{GpuRenderer, Splats};
 use crate::scene::kinematic::KinematicObject;
 use crate::scene::lighting::SceneLighting;
@@ -156,25 +155,19 @@ pub(super) fn execute(
         )?),
         false => None,
     };
-    let workers = FrameWriter::default_workers();
     let mut frames = Frames {
         job: &job,
         gpu,
-        dir: &dir,
         hash,
         renderer,
         splats: &splats,
         lighting: lighting.as_ref(),
         gpu_normals,
         rotator: opts.export_ply.as_ref().map(|_| ShRotator::new()),
-        writer: FrameWriter::new(workers, 2 * workers),
-        manifest: &mut manifest,
         fragment_log,
         checkpoint_file: checkpoint_path(&dir),
-        rendered: 0,
-        gpu_ms: 0.0,
+        sink: Sink::new(dir, manifest),
     };
-    let render_start = Instant::now();
     on_event(Event::Frames(job.frames.clone()));
     let first_sim = resume_from.as_ref().map_or(0, |cp| cp.frame);
     let result = match first_missing {
@@ -182,22 +175,10 @@ pub(super) fn execute(
         None => Ok(()),
     };
     let Frames {
-        writer,
-        rendered,
-        gpu_ms,
-        fragment_log,
-        ..
+        sink, fragment_log, ..
     } = frames;
-    job.finish(result, writer, &mut manifest, &dir, on_event)?;
-    Ok(Summary {
-        rendered,
-        render_seconds: render_start.elapsed().as_secs_f64(),
-        total_seconds: job.started.elapsed().as_secs_f64(),
-        gpu_ms,
-        png_workers: workers,
-        manifest: manifest.path().to_path_buf(),
-        fragments: fragment_log.map(|l| l.last().to_vec()).unwrap_or_default(),
-    })
+    let fragments = fragment_log.map(|l| l.last().to_vec()).unwrap_or_default();
+    job.finish(result, sink, fragments, on_event)
 }
 
 /// The grid's GPU size, checked before the simulation setup allocates it on the CPU.
@@ -376,19 +357,15 @@ impl<'a> Simulation<'a> {
 struct Frames<'a> {
     job: &'a Job,
     gpu: &'a GpuContext,
-    dir: &'a Path,
     hash: u64,
     renderer: GpuRenderer,
     splats: &'a Splats,
     lighting: Option<&'a SceneLighting>,
     gpu_normals: Option<GpuNormals>,
     rotator: Option<ShRotator>,
-    writer: FrameWriter,
-    manifest: &'a mut ManifestWriter,
     fragment_log: Option<FragmentLog>,
     checkpoint_file: PathBuf,
-    rendered: u32,
-    gpu_ms: f64,
+    sink: Sink,
 }
 
 impl Frames<'_> {
@@ -423,7 +400,7 @@ impl Frames<'_> {
                     continue;
                 }
             }
-            if self.job.opts.resume && self.job.frame_done(self.dir, frame) {
+            if self.job.opts.resume && self.job.frame_done(&self.sink.dir, frame) {
                 on_event(Event::FrameDone {
                     frame,
                     skipped: true,
@@ -452,7 +429,7 @@ impl Frames<'_> {
     /// Frames before this one reach the disk first, so a crash after the checkpoint never
     /// loses a frame that resuming from it would skip.
     fn checkpoint(&mut self, sim: &Simulation, frame: u32) -> Result<()> {
-        self.writer.flush()?;
+        self.sink.writer.flush()?;
         let s = sim.setup;
         let state = sim.sim.read_particles(self.gpu, &s.particles)?;
         Checkpoint::from_particles(
@@ -463,7 +440,7 @@ impl Frames<'_> {
             s.steps_per_frame,
         )
         .save(&self.checkpoint_file)?;
-        self.manifest.write_now()?;
+        self.sink.manifest.write_now()?;
         Ok(())
     }
 
@@ -487,18 +464,8 @@ impl Frames<'_> {
         let camera = self.job.path.camera(frame);
         let background = Vec3::from(scene.output.background);
         let (image, timings) = self.renderer.render_timed(gpu, &camera, background)?;
-        self.gpu_ms += timings.render_ms + timings.readback_ms;
-        self.writer.submit(
-            frame_path(self.dir, frame),
-            image.width,
-            image.height,
-            image.rgba,
-        )?;
         timing.render_ms = t1.elapsed().as_secs_f64() * 1e3;
-        timing.gpu_ms = timings.render_ms + timings.readback_ms;
-        self.manifest.frame_done(frame, timing)?;
-        self.rendered += 1;
-        Ok(())
+        self.sink.submit(frame, image, &timings, timing)
     }
 }
 
