@@ -1065,3 +1065,121 @@ fn nacc_p0_matches_the_oracle() {
         );
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// The model registry: the codes Rust gives a material reach the models they name
+
+/// Every registered elastic model, called through the generated `material_kirchhoff`
+/// with the record `GpuMaterial::from_material` builds, against its own f64 oracle; and
+/// every plastic model through `material_plasticity` against its WGSL function (NACC:
+/// `nacc_return_map`, bit for bit; none: F and α unchanged). A code that named another
+/// model fails here: the models differ by far more than the tolerance on these F.
+#[test]
+fn every_registered_model_is_reached_by_its_code() {
+    use splatter::sim::gpu::GpuMaterial;
+    use splatter::sim::{models, ElasticModel, Material, PlasticModel};
+    let mut r = SplitMix64::new(404);
+    let n = 2000;
+    let mut flat = Vec::new();
+    for _ in 0..n {
+        // Moderate strains (J > 0), where the models' stresses differ at second order.
+        let f = round_f32(
+            random_rotation(&mut r)
+                * DMat3::from_diagonal(
+                    DVec3::new(r.uniform(), r.uniform(), r.uniform()) * 0.8 + 0.6,
+                ),
+        );
+        push_mat(&mut flat, f);
+    }
+    let nacc = Material::Nacc {
+        params: NaccParams {
+            e: 2000.0,
+            nu: 0.38,
+            alpha0: -0.04,
+            beta: 1.0,
+            xi: 2.0,
+            m_slope: 2.36,
+        },
+        variant: Case3Variant::Continuous { k: 2.0 },
+    };
+    let mut materials: Vec<Material> = ElasticModel::ALL
+        .iter()
+        .map(|&m| Material::elastic(m, 2000.0, 0.38))
+        .collect();
+    materials.push(nacc);
+    let records: Vec<GpuMaterial> = materials.iter().map(GpuMaterial::from_material).collect();
+    let extra = format!(
+        "{}\n@group(0) @binding(2) var<storage, read> materials: array<SimMaterial>;",
+        models::wgsl()
+    );
+    // Per material: τ (9), the plastic F (9) and α (1), and nacc_return_map's F and α (10).
+    let body = "
+    let f = in_mat3(ib);
+    for (var k = 0u; k < arrayLength(&materials); k++) {
+        let m = materials[k];
+        let o = ob + k * 29u;
+        out_mat3(o, material_kirchhoff(m, f));
+        let p = material_plasticity(m, f, -0.04);
+        out_mat3(o + 9u, p.f);
+        out1(o + 18u, p.alpha);
+        let r = nacc_return_map(f, -0.04, m.nacc);
+        out_mat3(o + 19u, r.f);
+        out1(o + 28u, r.alpha);
+    }";
+    let stride = 29 * records.len();
+    let src = harness(9, stride, &extra, body);
+    for gpu in gpus() {
+        let out = run(
+            gpu,
+            "registry harness",
+            &src,
+            &flat,
+            (9, stride),
+            Some(bytemuck::cast_slice(&records)),
+        );
+        let mut worst = 0.0f64;
+        let mut yielded = 0;
+        for i in 0..n {
+            let f = mat_at(&flat, i * 9);
+            for (k, m) in materials.iter().enumerate() {
+                let o = i * stride + k * 29;
+                let rec = &records[k];
+                let lame = Lame {
+                    mu: f64::from(rec.mu),
+                    lambda: f64::from(rec.lambda),
+                };
+                let want = m.elastic_model().kirchhoff(f, &lame);
+                let err = max_abs(mat_at(&out, o) - want) / max_abs(want).max(1.0);
+                assert!(
+                    err < 1e-4,
+                    "{:?} (code {}): τ off by {err:e} for {f} on {}",
+                    m.elastic_model(),
+                    rec.elastic,
+                    backend(gpu)
+                );
+                worst = worst.max(err);
+                let (pf, pa) = (mat_at(&out, o + 9), out[o + 18]);
+                match m.plastic_model() {
+                    PlasticModel::None => {
+                        assert_eq!(pf, f, "no plasticity changed F");
+                        assert_eq!(pa, -0.04f32, "no plasticity changed α");
+                    }
+                    PlasticModel::Nacc => {
+                        assert_eq!(pf, mat_at(&out, o + 19), "NACC's F");
+                        assert_eq!(pa, out[o + 28], "NACC's α");
+                        yielded += usize::from(pf != f);
+                    }
+                }
+            }
+        }
+        assert!(
+            yielded > n / 20,
+            "test setup: NACC must yield on some F ({yielded})"
+        );
+        println!(
+            "registry on {}: {} elastic models ≤ {worst:.1e} relative, NACC reached ({yielded} of {n} F yielded)",
+            backend(gpu),
+            ElasticModel::ALL.len()
+        );
+    }
+}

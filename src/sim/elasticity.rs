@@ -6,6 +6,7 @@
 
 use glam::{DMat3, DVec3};
 
+use super::models::ElasticDef;
 use super::svd::{polar, svd3};
 
 /// Lamé parameters μ (`mu`, shear modulus) and λ (`lambda`).
@@ -35,15 +36,6 @@ impl Lame {
     }
 }
 
-/// The elastic models of docs/method.md §3.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ElasticModel {
-    /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I.
-    FixedCorotated,
-    /// Borden form: τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I.
-    NeoHookean,
-}
-
 /// Trace of a 3×3 matrix.
 pub fn trace(a: DMat3) -> f64 {
     a.x_axis.x + a.y_axis.y + a.z_axis.z
@@ -70,39 +62,47 @@ pub fn kirchhoff_neo_hookean(f: DMat3, lame: &Lame) -> DMat3 {
     dev(b) * (lame.mu * j.powf(-2.0 / 3.0)) + DMat3::IDENTITY * (0.5 * lame.kappa() * (j * j - 1.0))
 }
 
-/// Kirchhoff stress of `model`.
-pub fn kirchhoff(model: ElasticModel, f: DMat3, lame: &Lame) -> DMat3 {
-    match model {
-        ElasticModel::FixedCorotated => kirchhoff_fixed_corotated(f, lame),
-        ElasticModel::NeoHookean => kirchhoff_neo_hookean(f, lame),
-    }
+/// Fixed-corotated strain energy density μ Σ(σᵢ − 1)² + λ/2 (J − 1)².
+pub fn energy_fixed_corotated(f: DMat3, lame: &Lame) -> f64 {
+    let j = f.determinant();
+    let d = svd3(f).sigma - DVec3::ONE;
+    lame.mu * d.length_squared() + 0.5 * lame.lambda * (j - 1.0) * (j - 1.0)
 }
 
-/// Strain energy density ψ(F) per unit rest volume, for testing τ = (∂ψ/∂F) Fᵀ.
-/// Fixed corotated: μ Σ(σᵢ − 1)² + λ/2 (J − 1)²; Neo-Hookean (docs/method.md §3):
+/// Neo-Hookean (docs/method.md §3) strain energy density
 /// μ/2 (tr(J^(−2/3) F Fᵀ) − 3) + κ/2 ((J² − 1)/2 − ln J).
-pub fn energy_density(model: ElasticModel, f: DMat3, lame: &Lame) -> f64 {
+pub fn energy_neo_hookean(f: DMat3, lame: &Lame) -> f64 {
     let j = f.determinant();
-    match model {
-        ElasticModel::FixedCorotated => {
-            let d = svd3(f).sigma - DVec3::ONE;
-            lame.mu * d.length_squared() + 0.5 * lame.lambda * (j - 1.0) * (j - 1.0)
-        }
-        ElasticModel::NeoHookean => {
-            let tr_b = trace(f * f.transpose());
-            0.5 * lame.mu * (j.powf(-2.0 / 3.0) * tr_b - 3.0)
-                + 0.5 * lame.kappa() * (0.5 * (j * j - 1.0) - j.ln())
-        }
-    }
+    let tr_b = trace(f * f.transpose());
+    0.5 * lame.mu * (j.powf(-2.0 / 3.0) * tr_b - 3.0)
+        + 0.5 * lame.kappa() * (0.5 * (j * j - 1.0) - j.ln())
 }
+
+/// Fixed corotated, registered in [`super::models`]; WGSL in `shaders/sim/elasticity.wgsl`.
+pub const FIXED_COROTATED: ElasticDef = ElasticDef {
+    name: "fixed_corotated",
+    kirchhoff: kirchhoff_fixed_corotated,
+    energy: energy_fixed_corotated,
+    wgsl_kirchhoff: "elastic_kirchhoff_fixed_corotated(f, m.mu, m.lambda)",
+    wgsl_module: "",
+};
+
+/// Neo-Hookean (Borden), registered in [`super::models`]; WGSL in
+/// `shaders/sim/elasticity.wgsl`. Also the elasticity under NACC.
+pub const NEO_HOOKEAN: ElasticDef = ElasticDef {
+    name: "neo_hookean",
+    kirchhoff: kirchhoff_neo_hookean,
+    energy: energy_neo_hookean,
+    wgsl_kirchhoff: "elastic_kirchhoff_neo_hookean(f, m.mu, m.kappa)",
+    wgsl_module: "",
+};
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
+    use crate::sim::models::ElasticModel;
     use glam::DQuat;
-
-    const MODELS: [ElasticModel; 2] = [ElasticModel::FixedCorotated, ElasticModel::NeoHookean];
 
     fn max_abs(m: DMat3) -> f64 {
         m.to_cols_array().iter().fold(0.0, |a, x| a.max(x.abs()))
@@ -134,10 +134,10 @@ mod tests {
     fn stress_free_at_rest_and_under_rotation() {
         let mut r = SplitMix64::new(21);
         let l = lame();
-        for m in MODELS {
-            assert!(max_abs(kirchhoff(m, DMat3::IDENTITY, &l)) < 1e-12);
+        for &m in ElasticModel::ALL {
+            assert!(max_abs(m.kirchhoff(DMat3::IDENTITY, &l)) < 1e-12);
             for _ in 0..1000 {
-                let tau = kirchhoff(m, random_rotation(&mut r), &l);
+                let tau = m.kirchhoff(random_rotation(&mut r), &l);
                 assert!(max_abs(tau) < 1e-9 * l.kappa(), "{m:?}: {tau}");
             }
         }
@@ -148,14 +148,14 @@ mod tests {
     fn stress_symmetric_and_objective() {
         let mut r = SplitMix64::new(22);
         let l = lame();
-        for m in MODELS {
+        for &m in ElasticModel::ALL {
             for _ in 0..2000 {
                 let f = DMat3::IDENTITY + random_matrix(&mut r, 0.4);
-                let tau = kirchhoff(m, f, &l);
+                let tau = m.kirchhoff(f, &l);
                 let scale = max_abs(tau).max(1.0);
                 assert!(max_abs(tau - tau.transpose()) < 1e-12 * scale);
                 let q = random_rotation(&mut r);
-                let rotated = kirchhoff(m, q * f, &l);
+                let rotated = m.kirchhoff(q * f, &l);
                 assert!(max_abs(rotated - q * tau * q.transpose()) < 1e-11 * scale);
             }
         }
@@ -169,13 +169,13 @@ mod tests {
         let l = lame();
         let h = 1e-5;
         let mut worst = 0.0f64;
-        for m in MODELS {
+        for &m in ElasticModel::ALL {
             for _ in 0..500 {
                 let dir = random_matrix(&mut r, 1.0);
                 let eps = (dir + dir.transpose()) * 0.5;
                 let linear = DMat3::IDENTITY * (l.lambda * trace(eps)) + eps * (2.0 * l.mu);
-                let plus = kirchhoff(m, DMat3::IDENTITY + dir * h, &l);
-                let minus = kirchhoff(m, DMat3::IDENTITY - dir * h, &l);
+                let plus = m.kirchhoff(DMat3::IDENTITY + dir * h, &l);
+                let minus = m.kirchhoff(DMat3::IDENTITY - dir * h, &l);
                 let fd = (plus - minus) * (0.5 / h);
                 let rel = max_abs(fd - linear) / max_abs(linear);
                 worst = worst.max(rel);
@@ -204,7 +204,7 @@ mod tests {
         let mut r = SplitMix64::new(24);
         let l = lame();
         let h = 1e-6;
-        for m in MODELS {
+        for &m in ElasticModel::ALL {
             for _ in 0..300 {
                 let f = DMat3::IDENTITY + random_matrix(&mut r, 0.3);
                 let mut p = DMat3::ZERO;
@@ -212,12 +212,12 @@ mod tests {
                     let mut e = [0.0; 9];
                     e[k] = h;
                     let d = DMat3::from_cols_array(&e);
-                    let dpsi = energy_density(m, f + d, &l) - energy_density(m, f - d, &l);
+                    let dpsi = m.energy_density(f + d, &l) - m.energy_density(f - d, &l);
                     let mut cols = p.to_cols_array();
                     cols[k] = dpsi / (2.0 * h);
                     p = DMat3::from_cols_array(&cols);
                 }
-                let tau = kirchhoff(m, f, &l);
+                let tau = m.kirchhoff(f, &l);
                 let err = max_abs(p * f.transpose() - tau) / max_abs(tau).max(1.0);
                 assert!(err < 1e-6, "{m:?}: {} vs {tau}", p * f.transpose());
             }

@@ -33,6 +33,7 @@ use glam::{DMat3, DVec3, Mat3};
 use wgpu::util::DeviceExt;
 
 use super::kinematic::{ColliderShape, KinematicCollider, RigidPose};
+use super::models;
 use super::wgsl::{self, NaccMaterialGpu};
 use super::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
 use crate::gpu::buffers::{read_buffer, storage};
@@ -52,7 +53,10 @@ const BLOCK: u32 = 4;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuMaterial {
-    pub kind: u32,
+    /// `ElasticModel::code`.
+    pub elastic: u32,
+    /// `PlasticModel::code`.
+    pub plastic: u32,
     pub mu: f32,
     pub lambda: f32,
     pub kappa: f32,
@@ -173,16 +177,17 @@ impl GpuCondition {
 }
 
 impl GpuMaterial {
-    fn from_cpu(m: &Material) -> Self {
+    /// The GPU record of `m`: its registered models' codes and parameters.
+    pub fn from_material(m: &Material) -> Self {
         let lame = m.lame();
         let kappa = lame.lambda + 2.0 * lame.mu / 3.0;
-        let (kind, nacc) = match m {
-            Material::FixedCorotated { .. } => (0, NaccMaterialGpu::default()),
-            Material::NeoHookean { .. } => (1, NaccMaterialGpu::default()),
-            Material::Nacc { params, variant } => (2, NaccMaterialGpu::new(params, *variant)),
+        let nacc = match m {
+            Material::Nacc { params, variant } => NaccMaterialGpu::new(params, *variant),
+            Material::Elastic { .. } => NaccMaterialGpu::default(),
         };
         GpuMaterial {
-            kind,
+            elastic: m.elastic_model().code(),
+            plastic: m.plastic_model().code(),
             mu: lame.mu as f32,
             lambda: lame.lambda as f32,
             kappa: kappa as f32,
@@ -249,7 +254,7 @@ impl GpuStep {
             };
         }
         for (slot, m) in step.materials.iter_mut().zip(materials) {
-            *slot = GpuMaterial::from_cpu(m);
+            *slot = GpuMaterial::from_material(m);
         }
         Ok(step)
     }
@@ -275,6 +280,7 @@ fn source(pass: &str) -> String {
     [
         wgsl::library().as_str(),
         include_str!("../../shaders/sim/step/common.wgsl"),
+        models::wgsl().as_str(),
         include_str!("../../shaders/sim/step/grid_update.wgsl"),
         pass,
     ]
@@ -1223,7 +1229,7 @@ mod tests {
             &src,
             GpuMaterial,
             "SimMaterial",
-            [kind, mu, lambda, kappa, nacc]
+            [elastic, plastic, mu, lambda, kappa, nacc]
         );
         assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
         assert_layout!(&src, GpuCollider, "Collider", [point, normal, condition]);

@@ -4,17 +4,17 @@
 
 use glam::DMat3;
 
-use super::elasticity::{kirchhoff, ElasticModel, Lame};
+use super::elasticity::Lame;
+use super::models::{ElasticModel, PlasticModel};
 use super::nacc::{return_map, Case3Variant, NaccParams};
 
 /// A material: an elastic model, or NACC plasticity on top of Neo-Hookean (docs/method.md §3–§4).
+/// The models themselves are registered in [`super::models`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
-    /// τ = 2μ (F − R) Fᵀ + λ (J − 1) J I; no plasticity.
-    FixedCorotated { lame: Lame },
-    /// Borden Neo-Hookean τ = μ J^(−2/3) dev(F Fᵀ) + κ/2 (J² − 1) I; no plasticity. Needs
-    /// det F > 0 (an inverted F gives NaN, which [`check`] reports).
-    NeoHookean { lame: Lame },
+    /// An elastic model without plasticity. Neo-Hookean needs det F > 0 (an inverted F
+    /// gives NaN, which [`super::cpu::check`] reports).
+    Elastic { model: ElasticModel, lame: Lame },
     /// Neo-Hookean stress with the NACC return mapping and hardening after each F update.
     Nacc {
         params: NaccParams,
@@ -25,14 +25,18 @@ pub enum Material {
 impl Material {
     /// Fixed corotated from Young's modulus and Poisson ratio.
     pub fn fixed_corotated(e: f64, nu: f64) -> Self {
-        Material::FixedCorotated {
-            lame: Lame::from_young_poisson(e, nu),
-        }
+        Self::elastic(ElasticModel::FixedCorotated, e, nu)
     }
 
     /// Neo-Hookean (Borden) from Young's modulus and Poisson ratio.
     pub fn neo_hookean(e: f64, nu: f64) -> Self {
-        Material::NeoHookean {
+        Self::elastic(ElasticModel::NeoHookean, e, nu)
+    }
+
+    /// Any registered elastic model from Young's modulus and Poisson ratio.
+    pub fn elastic(model: ElasticModel, e: f64, nu: f64) -> Self {
+        Material::Elastic {
+            model,
             lame: Lame::from_young_poisson(e, nu),
         }
     }
@@ -40,8 +44,24 @@ impl Material {
     /// Lamé parameters of the elastic part.
     pub fn lame(&self) -> Lame {
         match self {
-            Material::FixedCorotated { lame } | Material::NeoHookean { lame } => *lame,
+            Material::Elastic { lame, .. } => *lame,
             Material::Nacc { params, .. } => params.lame(),
+        }
+    }
+
+    /// The elastic model of the stress.
+    pub fn elastic_model(&self) -> ElasticModel {
+        match self {
+            Material::Elastic { model, .. } => *model,
+            Material::Nacc { .. } => ElasticModel::NeoHookean,
+        }
+    }
+
+    /// The plastic model after the F update.
+    pub fn plastic_model(&self) -> PlasticModel {
+        match self {
+            Material::Elastic { .. } => PlasticModel::None,
+            Material::Nacc { .. } => PlasticModel::Nacc,
         }
     }
 
@@ -60,11 +80,7 @@ impl Material {
 
     /// Kirchhoff stress τ(F) (docs/method.md §3).
     pub fn kirchhoff(&self, f: DMat3) -> DMat3 {
-        match self {
-            Material::FixedCorotated { lame } => kirchhoff(ElasticModel::FixedCorotated, f, lame),
-            Material::NeoHookean { lame } => kirchhoff(ElasticModel::NeoHookean, f, lame),
-            Material::Nacc { params, .. } => kirchhoff(ElasticModel::NeoHookean, f, &params.lame()),
-        }
+        self.elastic_model().kirchhoff(f, &self.lame())
     }
 
     /// The plastic step after the F update: (F, α) unchanged for the elastic models, the

@@ -16,8 +16,8 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use super::runner::{simulate, Outcome};
-use crate::sim::elasticity::{energy_density, ElasticModel};
 use crate::sim::nacc::{project_pq, ReturnCase};
+use crate::sim::ElasticModel;
 use crate::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
@@ -353,7 +353,7 @@ fn energy(p: &Particles, params: &NaccParams) -> f64 {
     (0..p.len())
         .map(|q| {
             let m = p.mass[q];
-            let psi = energy_density(ElasticModel::NeoHookean, p.f[q], &lame);
+            let psi = ElasticModel::NeoHookean.energy_density(p.f[q], &lame);
             0.5 * m * p.v[q].length_squared() + m * G * (p.x[q].y - GROUND) + p.volume0[q] * psi
         })
         .sum()

@@ -6,22 +6,9 @@ const MAX_MATERIALS: u32 = 16u;
 const MAX_COLLIDERS: u32 = 8u;
 const MAX_KINEMATIC: u32 = 4u;
 
-const MATERIAL_FIXED_COROTATED: u32 = 0u;
-const MATERIAL_NEO_HOOKEAN: u32 = 1u;
-const MATERIAL_NACC: u32 = 2u;
-
 const BOUNDARY_STICKY: u32 = 0u;
 const BOUNDARY_SLIP: u32 = 1u;
 const BOUNDARY_SEPARATE: u32 = 2u;
-
-struct SimMaterial {
-    // MATERIAL_*
-    kind: u32,
-    mu: f32,
-    lambda: f32,
-    kappa: f32,
-    nacc: NaccMaterial,
-}
 
 // A boundary condition on a domain face or a collider.
 struct Condition {

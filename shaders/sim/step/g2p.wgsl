@@ -61,12 +61,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     affine_velocity[p] = c;
     x_mass[p] = vec4<f32>(xm.xyz + vp * step.dt, xm.w);
     let m = step.materials[material[p]];
-    var f_new = f_trial;
-    if m.kind == MATERIAL_NACC {
-        let r = nacc_return_map(f_trial, alpha[p], m.nacc);
-        f_new = r.f;
-        alpha[p] = r.alpha;
-    }
+    let plastic = material_plasticity(m, f_trial, alpha[p]);
+    let f_new = plastic.f;
+    alpha[p] = plastic.alpha;
     deformation[p] = f_new;
     if !(sim_is_finite3(vp) && sim_is_finite_mat3(f_new)) {
         count_failure(0u);

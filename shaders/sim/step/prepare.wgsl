@@ -11,14 +11,6 @@
 @group(0) @binding(7) var<storage, read_write> cell_values: array<u32>;
 @group(0) @binding(8) var<storage, read_write> affine: array<mat3x3<f32>>;
 
-fn kirchhoff(m: SimMaterial, f: mat3x3<f32>) -> mat3x3<f32> {
-    if m.kind == MATERIAL_FIXED_COROTATED {
-        return elastic_kirchhoff_fixed_corotated(f, m.mu, m.lambda);
-    }
-    // Neo-Hookean (Borden) is also the elasticity under NACC (docs/method.md §3).
-    return elastic_kirchhoff_neo_hookean(f, m.mu, m.kappa);
-}
-
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
@@ -38,7 +30,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
     let mass = xm.w;
     let inv_d = 4.0 / (step.dx * step.dx);
-    let tau = kirchhoff(step.materials[material[p]], deformation[p]);
+    let tau = material_kirchhoff(step.materials[material[p]], deformation[p]);
     var a = tau * (-step.dt * v_volume[p].w * inv_d);
     if step.apic == 1u {
         a += affine_velocity[p] * mass;
