@@ -401,7 +401,7 @@ pub fn prepare(
         let fractures = obj
             .physics
             .as_ref()
-            .is_some_and(|p| matches!(p.material, MaterialSpec::Nacc { .. }));
+            .is_some_and(|p| matches!(p.material, MaterialSpec::Nacc(_)));
         let recomputed = match spec.simulated_normals {
             NormalMode::Recompute => true,
             NormalMode::Transport => false,

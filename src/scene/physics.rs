@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SceneError;
 use crate::sim::nacc::{m_from_friction_angle, Case3Variant, NaccParams};
-use crate::sim::{BoundaryKind, Condition, Material};
+use crate::sim::{BoundaryKind, Condition, ElasticModel, Material};
 
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.8]
@@ -224,45 +224,142 @@ impl FillSpec {
     }
 }
 
-/// A material (docs/method.md §3–§4, parameters as in the paper's table).
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
-#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+/// A material (docs/method.md §3–§4, parameters as in the paper's table): `model` is a
+/// registered elastic model (`sim::models`: `fixed_corotated`, `neo_hookean`, …) or
+/// `nacc`.
+#[derive(Clone, Debug)]
 pub enum MaterialSpec {
-    /// Elastic, fixed corotated.
-    FixedCorotated {
-        #[serde(rename = "E")]
-        e: f64,
-        nu: f64,
-        density: f64,
-    },
-    /// Elastic, Neo-Hookean (Borden).
-    NeoHookean {
-        #[serde(rename = "E")]
-        e: f64,
-        nu: f64,
-        density: f64,
-    },
+    /// Elastic, no plasticity.
+    Elastic(ElasticSpec),
     /// CD-MPM: Non-Associated Cam-Clay on Neo-Hookean, with hardening.
-    Nacc {
-        #[serde(rename = "E")]
-        e: f64,
-        nu: f64,
-        density: f64,
-        alpha0: f64,
-        beta: f64,
-        xi: f64,
-        /// Slope M of the critical-state line (or give `friction_angle_deg`).
-        #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
-        m_slope: Option<f64>,
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        friction_angle_deg: Option<f64>,
-        /// Case-3 return mapping: `center`, `continuous` (default) or `closest_point`.
-        #[serde(default = "default_mapping")]
-        return_mapping: ReturnMappingSpec,
-        /// Exponent k of the `continuous` mapping. Default 2.
-        #[serde(default = "default_k")]
-        k: f64,
-    },
+    Nacc(NaccSpec),
+}
+
+/// An elastic material of a registered model.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ElasticSpec {
+    pub model: ElasticModelName,
+    #[serde(rename = "E")]
+    pub e: f64,
+    pub nu: f64,
+    pub density: f64,
+}
+
+/// A NACC material.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct NaccSpec {
+    pub model: NaccTag,
+    #[serde(rename = "E")]
+    pub e: f64,
+    pub nu: f64,
+    pub density: f64,
+    pub alpha0: f64,
+    pub beta: f64,
+    pub xi: f64,
+    /// Slope M of the critical-state line (or give `friction_angle_deg`).
+    #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
+    pub m_slope: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub friction_angle_deg: Option<f64>,
+    /// Case-3 return mapping: `center`, `continuous` (default) or `closest_point`.
+    #[serde(default = "default_mapping")]
+    pub return_mapping: ReturnMappingSpec,
+    /// Exponent k of the `continuous` mapping. Default 2.
+    #[serde(default = "default_k")]
+    pub k: f64,
+}
+
+/// `"model": "nacc"`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum NaccTag {
+    Nacc,
+}
+
+/// A registered elastic model, by its name in the scene file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ElasticModelName(pub ElasticModel);
+
+fn elastic_names() -> Vec<&'static str> {
+    ElasticModel::ALL.iter().map(|m| m.def().name).collect()
+}
+
+impl Serialize for ElasticModelName {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.0.def().name)
+    }
+}
+
+impl<'de> Deserialize<'de> for ElasticModelName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        ElasticModel::from_name(&name)
+            .map(ElasticModelName)
+            .ok_or_else(|| serde::de::Error::custom(unknown_model(&name)))
+    }
+}
+
+impl JsonSchema for ElasticModelName {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "ElasticModelName".into()
+    }
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({ "type": "string", "enum": elastic_names() })
+    }
+}
+
+fn unknown_model(name: &str) -> String {
+    format!(
+        "unknown material model `{name}`, expected one of {}, `nacc`",
+        elastic_names()
+            .iter()
+            .map(|n| format!("`{n}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+impl Serialize for MaterialSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            MaterialSpec::Elastic(m) => m.serialize(s),
+            MaterialSpec::Nacc(m) => m.serialize(s),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialSpec {
+    /// By `model`: `nacc`, or a registered elastic model.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let value = serde_json::Value::deserialize(d)?;
+        let model = match value.get("model") {
+            Some(serde_json::Value::String(m)) => m.clone(),
+            Some(other) => return Err(D::Error::custom(format!("`model` {other}: expected a string"))),
+            None => return Err(D::Error::missing_field("model")),
+        };
+        if model == "nacc" {
+            NaccSpec::deserialize(value).map(MaterialSpec::Nacc).map_err(D::Error::custom)
+        } else if ElasticModel::from_name(&model).is_some() {
+            ElasticSpec::deserialize(value).map(MaterialSpec::Elastic).map_err(D::Error::custom)
+        } else {
+            Err(D::Error::custom(unknown_model(&model)))
+        }
+    }
+}
+
+impl JsonSchema for MaterialSpec {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "MaterialSpec".into()
+    }
+    fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "A material: a registered elastic model, or NACC (docs/method.md §3–§4).",
+            "oneOf": [generator.subschema_for::<ElasticSpec>(), generator.subschema_for::<NaccSpec>()]
+        })
+    }
 }
 
 fn default_mapping() -> ReturnMappingSpec {
@@ -283,9 +380,8 @@ pub enum ReturnMappingSpec {
 impl MaterialSpec {
     pub fn density(&self) -> f64 {
         match self {
-            MaterialSpec::FixedCorotated { density, .. }
-            | MaterialSpec::NeoHookean { density, .. }
-            | MaterialSpec::Nacc { density, .. } => *density,
+            MaterialSpec::Elastic(m) => m.density,
+            MaterialSpec::Nacc(m) => m.density,
         }
     }
 
@@ -295,9 +391,8 @@ impl MaterialSpec {
             SceneError::invalid(origin, format!("{field}.{name}"), v, expected)
         };
         let (e, nu, density) = match self {
-            MaterialSpec::FixedCorotated { e, nu, density }
-            | MaterialSpec::NeoHookean { e, nu, density }
-            | MaterialSpec::Nacc { e, nu, density, .. } => (*e, *nu, *density),
+            MaterialSpec::Elastic(m) => (m.e, m.nu, m.density),
+            MaterialSpec::Nacc(m) => (m.e, m.nu, m.density),
         };
         if !(e.is_finite() && e > 0.0) {
             return Err(bad("E", e, "Young's modulus > 0"));
@@ -309,9 +404,8 @@ impl MaterialSpec {
             return Err(bad("density", density, "a density > 0"));
         }
         Ok(match self {
-            MaterialSpec::FixedCorotated { .. } => Material::fixed_corotated(e, nu),
-            MaterialSpec::NeoHookean { .. } => Material::neo_hookean(e, nu),
-            MaterialSpec::Nacc {
+            MaterialSpec::Elastic(m) => Material::elastic(m.model.0, e, nu),
+            MaterialSpec::Nacc(NaccSpec {
                 alpha0,
                 beta,
                 xi,
@@ -320,7 +414,7 @@ impl MaterialSpec {
                 return_mapping,
                 k,
                 ..
-            } => {
+            }) => {
                 let m_slope = match (m_slope, friction_angle_deg) {
                     (Some(m), None) if m.is_finite() && *m > 0.0 => *m,
                     (Some(m), None) => return Err(bad("M", *m, "a slope > 0")),
