@@ -337,13 +337,21 @@ impl<'de> Deserialize<'de> for MaterialSpec {
         let value = serde_json::Value::deserialize(d)?;
         let model = match value.get("model") {
             Some(serde_json::Value::String(m)) => m.clone(),
-            Some(other) => return Err(D::Error::custom(format!("`model` {other}: expected a string"))),
+            Some(other) => {
+                return Err(D::Error::custom(format!(
+                    "`model` {other}: expected a string"
+                )))
+            }
             None => return Err(D::Error::missing_field("model")),
         };
         if model == "nacc" {
-            NaccSpec::deserialize(value).map(MaterialSpec::Nacc).map_err(D::Error::custom)
+            NaccSpec::deserialize(value)
+                .map(MaterialSpec::Nacc)
+                .map_err(D::Error::custom)
         } else if ElasticModel::from_name(&model).is_some() {
-            ElasticSpec::deserialize(value).map(MaterialSpec::Elastic).map_err(D::Error::custom)
+            ElasticSpec::deserialize(value)
+                .map(MaterialSpec::Elastic)
+                .map_err(D::Error::custom)
         } else {
             Err(D::Error::custom(unknown_model(&model)))
         }

@@ -6,7 +6,9 @@
 
 use glam::DVec3;
 
-use super::physics::{vec3, SelectSpec};
+use std::ops::Range;
+
+use super::physics::{vec3, SelectSpec, SimulationSpec};
 use super::regions::{ObjectRegions, ParticleKey};
 use super::{BuildReport, Scene, SceneError};
 use crate::render::Splats;
@@ -91,6 +93,58 @@ pub fn prepare(
     if simulated.is_empty() {
         return Ok(None);
     }
+    let grid = grid_of(spec, o)?;
+    let boundaries = boundaries_of(spec, o)?;
+    let ranges = object_ranges(report);
+    let kinematic = super::kinematic::build(scene, &splats, |i| ranges[i].clone())?;
+    let moving = select_moving(scene, &splats, &ranges, &simulated)?;
+
+    // Static first: whole static objects and what simulated objects leave static, in file
+    // order; then per simulated object its selected Gaussians and its fill.
+    let mut out = Parts::new(splats.sh_degree);
+    for (i, range) in ranges.iter().enumerate() {
+        let part = match &moving[i] {
+            None => subset(&splats, range.clone()),
+            Some(picked) => {
+                let mut keep = vec![true; range.len()];
+                for &g in picked {
+                    keep[g - range.start] = false;
+                }
+                let rest: Vec<usize> = range.clone().filter(|g| keep[g - range.start]).collect();
+                gather(&splats, &rest)
+            }
+        };
+        out.push(part, i, PartKind::Static);
+    }
+    let static_count = out.splats.len();
+    let mut body = Bodies::default();
+    for &i in &simulated {
+        let picked = moving[i].as_deref().expect("simulated");
+        body.add(scene, i, gather(&splats, picked), &grid, spec, &mut out)?;
+    }
+    let (dt, steps_per_frame) = time_step(scene, spec, body.dt_cfl, &mut body.warnings)?;
+    let params = StepParams {
+        dt,
+        gravity: vec3(spec.gravity),
+        boundaries,
+        transfer: Transfer::Apic,
+    };
+    Ok(Some(SimulationSetup {
+        splats: out.splats,
+        static_count,
+        parts: out.parts,
+        particles: body.particles,
+        grid,
+        materials: body.materials,
+        params,
+        steps_per_frame,
+        kinematic,
+        warnings: body.warnings,
+    }))
+}
+
+/// The grid over `simulation.domain` at `simulation.dx`, validated.
+fn grid_of(spec: &SimulationSpec, o: &str) -> Result<Grid, SceneError> {
     let (lo, hi) = (vec3(spec.domain.lo), vec3(spec.domain.hi));
     if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
         return Err(SceneError::invalid(
@@ -111,7 +165,11 @@ pub fn prepare(
             "a spacing > 0 giving 4 to 400 cells per axis (at most 64M cells)",
         ));
     }
-    let grid = Grid::new(lo, hi, dx);
+    Ok(Grid::new(lo, hi, dx))
+}
+
+/// The domain walls (`walls`, `ground`) and the planar colliders.
+fn boundaries_of(spec: &SimulationSpec, o: &str) -> Result<Boundaries, SceneError> {
     let mut walls = DomainWalls::uniform(spec.walls.build(o, "simulation.walls")?);
     if let Some(g) = &spec.ground {
         walls.faces[4] = g.build(o, "simulation.ground")?;
@@ -143,19 +201,33 @@ pub fn prepare(
                 .build(o, &format!("simulation.colliders[{i}]"))?,
         });
     }
+    Ok(Boundaries { walls, colliders })
+}
 
-    // Object ranges in `splats` (file order).
-    let mut starts = Vec::with_capacity(report.objects.len());
+/// Each object's run in the built Gaussians (file order).
+fn object_ranges(report: &BuildReport) -> Vec<Range<usize>> {
     let mut acc = 0;
-    for r in &report.objects {
-        starts.push(acc);
-        acc += r.gaussians;
-    }
-    let range = |i: usize| starts[i]..starts[i] + report.objects[i].gaussians;
-    let kinematic = super::kinematic::build(scene, &splats, range)?;
-    // Which Gaussians of each simulated object move (indices into `splats`).
+    report
+        .objects
+        .iter()
+        .map(|r| {
+            acc += r.gaussians;
+            acc - r.gaussians..acc
+        })
+        .collect()
+}
+
+/// Which Gaussians of each simulated object move (`physics.select`, `min_opacity`), as
+/// indices into `splats`; `None` for objects that do not simulate.
+fn select_moving(
+    scene: &Scene,
+    splats: &Splats,
+    ranges: &[Range<usize>],
+    simulated: &[usize],
+) -> Result<Vec<Option<Vec<usize>>>, SceneError> {
+    let o = scene.origin.as_str();
     let mut moving: Vec<Option<Vec<usize>>> = vec![None; scene.objects.len()];
-    for &i in &simulated {
+    for &i in simulated {
         let physics = scene.objects[i].physics.as_ref().expect("simulated");
         if let Some(sel) = &physics.select {
             sel.validate(o, &format!("objects[{i}].physics.select"))?;
@@ -169,7 +241,8 @@ pub fn prepare(
                 "an opacity in [0, 1]",
             ));
         }
-        let picked: Vec<usize> = range(i)
+        let picked: Vec<usize> = ranges[i]
+            .clone()
             .filter(|&g| {
                 f64::from(splats.opacities[g]) >= min_opacity
                     && physics
@@ -178,7 +251,7 @@ pub fn prepare(
                         .is_none_or(|s| s.contains(splats.means[g].as_dvec3()))
             })
             .collect();
-        if picked.is_empty() && report.objects[i].gaussians > 0 {
+        if picked.is_empty() && !ranges[i].is_empty() {
             let field = if physics.select.is_some() {
                 "select"
             } else {
@@ -187,83 +260,83 @@ pub fn prepare(
             return Err(SceneError::invalid(
                 o,
                 format!("objects[{i}].physics.{field}"),
-                format!("a selection of none of the object's {} Gaussians", report.objects[i].gaussians),
+                format!("a selection of none of the object's {} Gaussians", ranges[i].len()),
                 "at least one Gaussian to simulate (check the region against the object's transform)",
             ));
         }
         moving[i] = Some(picked);
     }
+    Ok(moving)
+}
 
-    let mut out = Splats {
-        sh_degree: splats.sh_degree,
-        ..Default::default()
-    };
-    let mut parts = Vec::new();
-    let mut push_part = |out: &mut Splats, part: Splats, object: usize, kind: PartKind| {
+/// The Gaussians of a simulation in order, and the runs they form.
+struct Parts {
+    splats: Splats,
+    parts: Vec<SplatPart>,
+}
+
+impl Parts {
+    fn new(sh_degree: u32) -> Parts {
+        Parts {
+            splats: Splats {
+                sh_degree,
+                ..Default::default()
+            },
+            parts: Vec::new(),
+        }
+    }
+
+    fn push(&mut self, part: Splats, object: usize, kind: PartKind) {
         if !part.is_empty() {
-            parts.push(SplatPart {
+            self.parts.push(SplatPart {
                 object,
-                start: out.len(),
+                start: self.splats.len(),
                 len: part.len(),
                 kind,
             });
-            out.append(part);
+            self.splats.append(part);
         }
-    };
-    // Static first: whole static objects and what simulated objects leave static, in file
-    // order.
-    for i in 0..scene.objects.len() {
-        let part = match &moving[i] {
-            None => subset(&splats, range(i)),
-            Some(picked) => {
-                let mut keep = vec![true; report.objects[i].gaussians];
-                let s = starts[i];
-                for &g in picked {
-                    keep[g - s] = false;
-                }
-                let rest: Vec<usize> = range(i).filter(|g| keep[g - s]).collect();
-                gather(&splats, &rest)
-            }
-        };
-        push_part(&mut out, part, i, PartKind::Static);
     }
-    let static_count = out.len();
+}
 
-    let mut materials = Vec::new();
-    let mut particles = Particles::new();
-    let mut warnings = Vec::new();
-    let mut dt_cfl = f64::INFINITY;
-    for &i in &simulated {
-        let picked = moving[i].as_deref().expect("simulated");
-        let part = gather(&splats, picked);
+/// The simulated bodies as they are added: particles, materials, the CFL bound.
+struct Bodies {
+    particles: Particles,
+    materials: Vec<Material>,
+    warnings: Vec<String>,
+    dt_cfl: f64,
+}
+
+impl Default for Bodies {
+    fn default() -> Self {
+        Bodies {
+            particles: Particles::new(),
+            materials: Vec::new(),
+            warnings: Vec::new(),
+            dt_cfl: f64::INFINITY,
+        }
+    }
+}
+
+impl Bodies {
+    /// Object `i` with its selected Gaussians `part`: its materials (and regions'), its
+    /// fill, one particle per Gaussian and fill point, and its Gaussians into `out`.
+    fn add(
+        &mut self,
+        scene: &Scene,
+        i: usize,
+        part: Splats,
+        grid: &Grid,
+        spec: &SimulationSpec,
+        out: &mut Parts,
+    ) -> Result<(), SceneError> {
+        let o = scene.origin.as_str();
         let obj = &scene.objects[i];
         let physics = obj.physics.as_ref().expect("simulated");
-        let field = format!("objects[{i}].physics.material");
-        let material = physics.material.build(o, &field)?;
-        let density = physics.material.density();
-        dt_cfl = dt_cfl.min(cfl_dt(&material, density, dx, spec.cfl));
-        let m_index = materials.len() as u32;
-        materials.push(material);
-        let regions = ObjectRegions::build(o, i, &physics.regions, &object_labels(&part))?;
-        for (m, rho) in &regions.materials {
-            dt_cfl = dt_cfl.min(cfl_dt(m, *rho, dx, spec.cfl));
-            materials.push(*m);
-        }
-        if materials.len() > crate::sim::gpu::MAX_MATERIALS {
-            return Err(SceneError::invalid(
-                o,
-                format!("objects[{i}].physics.regions"),
-                format!("{} materials in the scene", materials.len()),
-                format!(
-                    "at most {} materials over all simulated objects and their regions",
-                    crate::sim::gpu::MAX_MATERIALS
-                ),
-            ));
-        }
-
-        let filled = match physics.fill.as_ref().and_then(|f| f.spacing(dx)) {
+        let (m_index, density, regions) = self.add_materials(scene, i, &part, grid.dx, spec.cfl)?;
+        let filled = match physics.fill.as_ref().and_then(|f| f.spacing(grid.dx)) {
             None => None,
-            Some(h) => Some(fill_object(scene, i, &part, h, dx)?),
+            Some(h) => Some(fill_object(scene, i, &part, h, grid.dx)?),
         };
         let mut fill_splats = filled
             .as_ref()
@@ -271,34 +344,13 @@ pub fn prepare(
             .unwrap_or_default();
         if let Some(f) = &filled {
             let name = obj.display_name(i);
-            warnings.extend(
+            self.warnings.extend(
                 f.warnings
                     .iter()
                     .map(|w| format!("objects[{i}] ({name}): {w}")),
             );
         }
-        // Positions and rest volumes: the selected Gaussians, then the fill particles.
-        let (xs, volumes): (Vec<DVec3>, Vec<f64>) = match &filled {
-            None => {
-                let v = particle_volume(obj, &part);
-                (
-                    part.means.iter().map(|m| m.as_dvec3()).collect(),
-                    vec![v; part.len()],
-                )
-            }
-            Some(f) => (
-                part.means
-                    .iter()
-                    .map(|m| m.as_dvec3())
-                    .chain(f.points.iter().copied())
-                    .collect(),
-                f.volumes
-                    .iter()
-                    .copied()
-                    .chain(std::iter::repeat_n(f.point_volume, f.points.len()))
-                    .collect(),
-            ),
-        };
+        let (xs, volumes) = positions_and_volumes(obj, &part, filled.as_ref());
         let centre = if filled.is_some() {
             let total: f64 = volumes.iter().sum();
             xs.iter().zip(&volumes).map(|(x, v)| *x * *v).sum::<DVec3>() / total.max(1e-300)
@@ -308,7 +360,7 @@ pub fn prepare(
         let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
         let region = assign_regions(obj, &regions, &xs, &part, filled.as_ref(), &fill_splats);
         recolour_fill(&mut fill_splats, &region[part.len()..], &regions);
-        let start = particles.len();
+        let start = self.particles.len();
         for ((x, volume), r) in xs.iter().zip(&volumes).zip(&region) {
             let x = *x;
             let (m_index, density) = match r {
@@ -316,6 +368,7 @@ pub fn prepare(
                 Some(r) => (m_index + 1 + *r as u32, regions.materials[*r].1),
             };
             if grid.stencil(x).is_none() {
+                let (lo, hi) = (vec3(spec.domain.lo), vec3(spec.domain.hi));
                 return Err(SceneError::invalid(
                     o,
                     format!("objects[{i}]"),
@@ -323,7 +376,7 @@ pub fn prepare(
                     format!("every simulated Gaussian inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
                 ));
             }
-            particles.push(
+            self.particles.push(
                 x,
                 v0 + w0.cross(x - centre),
                 density * volume,
@@ -338,20 +391,99 @@ pub fn prepare(
             DVec3::new(-w0.z, 0.0, w0.x),
             DVec3::new(w0.y, -w0.x, 0.0),
         );
-        for p in start..particles.len() {
-            particles.c[p] = skew;
-            particles.alpha[p] = materials[particles.material[p] as usize].initial_alpha();
+        for p in start..self.particles.len() {
+            self.particles.c[p] = skew;
+            self.particles.alpha[p] =
+                self.materials[self.particles.material[p] as usize].initial_alpha();
         }
-        push_part(&mut out, part, i, PartKind::Simulated);
-        push_part(&mut out, fill_splats, i, PartKind::Fill);
+        out.push(part, i, PartKind::Simulated);
+        out.push(fill_splats, i, PartKind::Fill);
+        Ok(())
     }
+
+    /// Object `i`'s material and its regions' materials, each lowering the CFL bound:
+    /// the index of the first, its density, and the regions.
+    fn add_materials(
+        &mut self,
+        scene: &Scene,
+        i: usize,
+        part: &Splats,
+        dx: f64,
+        cfl: f64,
+    ) -> Result<(u32, f64, ObjectRegions), SceneError> {
+        let o = scene.origin.as_str();
+        let physics = scene.objects[i].physics.as_ref().expect("simulated");
+        let field = format!("objects[{i}].physics.material");
+        let material = physics.material.build(o, &field)?;
+        let density = physics.material.density();
+        self.dt_cfl = self.dt_cfl.min(cfl_dt(&material, density, dx, cfl));
+        let m_index = self.materials.len() as u32;
+        self.materials.push(material);
+        let regions = ObjectRegions::build(o, i, &physics.regions, &object_labels(part))?;
+        for (m, rho) in &regions.materials {
+            self.dt_cfl = self.dt_cfl.min(cfl_dt(m, *rho, dx, cfl));
+            self.materials.push(*m);
+        }
+        if self.materials.len() > crate::sim::gpu::MAX_MATERIALS {
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics.regions"),
+                format!("{} materials in the scene", self.materials.len()),
+                format!(
+                    "at most {} materials over all simulated objects and their regions",
+                    crate::sim::gpu::MAX_MATERIALS
+                ),
+            ));
+        }
+        Ok((m_index, density, regions))
+    }
+}
+
+/// Particle positions and rest volumes: the selected Gaussians, then the fill points.
+fn positions_and_volumes(
+    obj: &super::ObjectSpec,
+    part: &Splats,
+    filled: Option<&super::fill::Fill>,
+) -> (Vec<DVec3>, Vec<f64>) {
+    match filled {
+        None => {
+            let v = particle_volume(obj, part);
+            (
+                part.means.iter().map(|m| m.as_dvec3()).collect(),
+                vec![v; part.len()],
+            )
+        }
+        Some(f) => (
+            part.means
+                .iter()
+                .map(|m| m.as_dvec3())
+                .chain(f.points.iter().copied())
+                .collect(),
+            f.volumes
+                .iter()
+                .copied()
+                .chain(std::iter::repeat_n(f.point_volume, f.points.len()))
+                .collect(),
+        ),
+    }
+}
+
+/// Δt (given, or the CFL bound) shrunk to divide the frame exactly, and the steps per
+/// frame.
+fn time_step(
+    scene: &Scene,
+    spec: &SimulationSpec,
+    dt_cfl: f64,
+    warnings: &mut Vec<String>,
+) -> Result<(f64, u32), SceneError> {
+    let o = scene.origin.as_str();
     let frame = 1.0 / f64::from(scene.output.fps);
     let dt = match spec.dt {
         Some(dt) if dt.is_finite() && dt > 0.0 => {
             if dt > dt_cfl {
                 warnings.push(format!(
-                    "simulation.dt = {dt:e} exceeds the CFL bound {dt_cfl:.3e} (cfl {}, Δx {dx}): expect instability; suggested dt ≤ {dt_cfl:.3e}",
-                    spec.cfl
+                    "simulation.dt = {dt:e} exceeds the CFL bound {dt_cfl:.3e} (cfl {}, Δx {}): expect instability; suggested dt ≤ {dt_cfl:.3e}",
+                    spec.cfl, spec.dx
                 ));
             }
             dt
@@ -375,24 +507,7 @@ pub fn prepare(
             "a step giving at most 10⁷ steps per frame",
         ));
     }
-    let params = StepParams {
-        dt: frame / steps_per_frame,
-        gravity: vec3(spec.gravity),
-        boundaries: Boundaries { walls, colliders },
-        transfer: Transfer::Apic,
-    };
-    Ok(Some(SimulationSetup {
-        splats: out,
-        static_count,
-        parts,
-        particles,
-        grid,
-        materials,
-        params,
-        steps_per_frame: steps_per_frame as u32,
-        kinematic,
-        warnings,
-    }))
+    Ok((frame / steps_per_frame, steps_per_frame as u32))
 }
 
 /// Each particle's region (None: the object's own material). Particles are the selected
