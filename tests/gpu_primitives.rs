@@ -162,3 +162,41 @@ fn radix_sort_is_a_stable_sort() {
         assert_eq!(got, expected, "n = {n}, {bits} bits");
     }
 }
+
+const DIFFERENCE: &str = "
+@group(0) @binding(0) var<storage, read> a: array<u32>;
+@group(0) @binding(1) var<storage, read> b: array<u32>;
+@group(0) @binding(2) var<storage, read_write> out: array<u32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if id.x < arrayLength(&out) {
+        out[id.x] = a[id.x] - b[id.x];
+    }
+}";
+
+/// `Kernel::bind_named` binds by the WGSL names whatever the order of the list: a − b
+/// comes out as a − b with the list given as (out, b, a).
+#[test]
+fn buffers_bound_by_name_reach_their_variables() {
+    let gpu = gpu();
+    let kernel = splatter::gpu::Kernel::new(&gpu.device, "difference", DIFFERENCE, "main");
+    let (a, b) = (upload(&gpu, &[10, 20, 30]), upload(&gpu, &[1, 2, 3]));
+    let out = upload(&gpu, &[0, 0, 0]);
+    let bind = kernel.bind_named(&gpu.device, &[("out", &out), ("b", &b), ("a", &a)]);
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        kernel.dispatch(&mut pass, &bind, 1);
+    }
+    gpu.queue.submit([enc.finish()]);
+    assert_eq!(download(&gpu, &out, 3), vec![9, 18, 27]);
+}
+
+#[test]
+#[should_panic(expected = "no `var c` at group 0")]
+fn a_name_the_shader_does_not_declare_is_refused() {
+    let gpu = gpu();
+    let kernel = splatter::gpu::Kernel::new(&gpu.device, "difference", DIFFERENCE, "main");
+    let x = upload(&gpu, &[0]);
+    kernel.bind_named(&gpu.device, &[("a", &x), ("c", &x), ("out", &x)]);
+}

@@ -2,11 +2,29 @@
 
 use std::borrow::Cow;
 
-/// A compute pipeline whose bind group 0 takes buffers at bindings 0, 1, 2, … in order.
+/// A compute pipeline whose bind group 0 takes buffers by the names the WGSL declares them
+/// with ([`Kernel::bind_named`]), or at bindings 0, 1, 2, … in order ([`Kernel::bind`]).
 pub struct Kernel {
     pub pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     label: &'static str,
+    /// `var` name → binding number of group 0, from the source (empty when built from a
+    /// module without its source).
+    bindings: Vec<(String, u32)>,
+}
+
+/// The `@group(0) @binding(n) var … name` declarations of a WGSL source.
+fn group0_bindings(label: &str, source: &str) -> Vec<(String, u32)> {
+    let module = wgpu::naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{label}: WGSL does not parse: {}", e.emit_to_string(source)));
+    module
+        .global_variables
+        .iter()
+        .filter_map(|(_, g)| {
+            let b = g.binding.as_ref()?;
+            (b.group == 0).then(|| (g.name.clone().unwrap_or_default(), b.binding))
+        })
+        .collect()
 }
 
 impl Kernel {
@@ -16,7 +34,9 @@ impl Kernel {
             label: Some(label),
             source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_owned())),
         });
-        Kernel::from_module(device, label, &module, entry)
+        let mut kernel = Kernel::from_module(device, label, &module, entry);
+        kernel.bindings = group0_bindings(label, source);
+        kernel
     }
 
     pub fn from_module(
@@ -38,7 +58,36 @@ impl Kernel {
             pipeline,
             layout,
             label,
+            bindings: Vec::new(),
         }
+    }
+
+    /// Bind each buffer to the binding its WGSL `var` is declared at. A name the source
+    /// does not declare is a programming error and panics, naming the kernel; a binding
+    /// the entry point uses but `buffers` leaves out is reported by wgpu's validation.
+    pub fn bind_named(
+        &self,
+        device: &wgpu::Device,
+        buffers: &[(&str, &wgpu::Buffer)],
+    ) -> wgpu::BindGroup {
+        let numbered: Vec<(u32, &wgpu::Buffer)> = buffers
+            .iter()
+            .map(|(name, b)| {
+                let binding = self
+                    .bindings
+                    .iter()
+                    .find(|(n, _)| n == name)
+                    .map(|(_, i)| *i)
+                    .unwrap_or_else(|| {
+                        panic!(
+                            "kernel {}: no `var {name}` at group 0 (declared: {:?})",
+                            self.label, self.bindings
+                        )
+                    });
+                (binding, *b)
+            })
+            .collect();
+        self.bind_at(device, &numbered)
     }
 
     /// Bind `buffers` to bindings 0, 1, 2, … (whole buffers).

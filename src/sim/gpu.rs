@@ -1,22 +1,6 @@
-//! The explicit MPM step on the GPU (docs/method.md §2), mirroring [`super::cpu`] pass for pass:
-//!
-//! 1. `shaders/sim/step/prepare.wgsl` — per particle: base-cell sort key and the affine
-//!    term m C − Δt V⁰ (4/Δx²) τ(F);
-//! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
-//! 3. `shaders/gpu/ranges.wgsl` — each cell's run of particles (the GPU primitive the
-//!    renderer also uses for its tiles);
-//! 4. `shaders/sim/step/mark_blocks.wgsl` — blocks of 4³ nodes that an occupied cell's
-//!    stencils reach, listed by `compact_blocks.wgsl` (the node passes run only there);
-//! 5. `shaders/sim/step/p2g.wgsl` — per node of the active blocks: gather mass and momentum from the 27
-//!    cells whose stencils reach it (no atomics: deterministic, and runs on GL too), then
-//!    the grid update in the same thread (`grid_update.wgsl`: velocity, gravity, colliders,
-//!    walls);
-//! 6. `shaders/sim/step/g2p.wgsl` — velocities, C, F, positions, NACC plasticity.
-//!
-//! Where the adapter has float atomics, steps 2–5 are instead `mark_particles.wgsl` (each
-//! particle flags the blocks of its stencil), `compact_blocks.wgsl`, `p2g_scatter.wgsl`
-//! (each particle adds to its 27 nodes) and `grid_from_sums.wgsl` (the grid update on the
-//! active blocks).
+//! The explicit MPM step on the GPU (docs/method.md §2), mirroring [`super::cpu`] pass for
+//! pass: [`GpuSim`] holds the particle state, the sparse grid and the step's passes
+//! ([`super::step`], one type per WGSL file), and records steps without readbacks.
 //!
 //! The grid is sparse: a pool of blocks of 4³ nodes with a block → slot table that
 //! `compact_blocks.wgsl` fills each step (`node_index` in `common.wgsl` is the only way to a
@@ -28,237 +12,23 @@
 //! f64 oracle in `tests/sim_wgsl.rs`; the whole step is tested against [`super::cpu`] in
 //! `tests/sim_gpu.rs`.
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 use glam::{DMat3, DVec3, Mat3};
 use wgpu::util::DeviceExt;
 
-use super::kinematic::{ColliderShape, KinematicCollider, RigidPose};
-use super::models;
-use super::wgsl::{self, NaccMaterialGpu};
-use super::{BoundaryKind, Condition, Grid, Material, Particles, StepParams, Transfer};
+use super::kinematic::KinematicCollider;
+use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
+use super::step::{Binds, Passes, StepBuffers, StepPass};
+use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
-use crate::gpu::ranges::Ranges;
-use crate::gpu::scan::Scan;
-use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
-use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::gpu::{GpuContext, GpuError};
 
-pub const MAX_MATERIALS: usize = 16;
-pub const MAX_COLLIDERS: usize = 8;
-/// Moving colliders (`MAX_KINEMATIC` in `shaders/sim/step/common.wgsl`).
-pub const MAX_KINEMATIC: usize = 4;
+pub use super::step::layout::{
+    GpuCollider, GpuCondition, GpuMaterial, GpuStep, SimSetupError, MAX_COLLIDERS, MAX_KINEMATIC,
+    MAX_MATERIALS,
+};
 /// Nodes per axis of an active block (`BLOCK` in `shaders/sim/step/common.wgsl`).
 const BLOCK: u32 = 4;
-
-/// `SimMaterial` of `shaders/sim/step/common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuMaterial {
-    /// `ElasticModel::code`.
-    pub elastic: u32,
-    /// `PlasticModel::code`.
-    pub plastic: u32,
-    pub mu: f32,
-    pub lambda: f32,
-    pub kappa: f32,
-    pub nacc: NaccMaterialGpu,
-}
-
-/// `Condition` of `shaders/sim/step/common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuCondition {
-    pub kind: u32,
-    pub friction: f32,
-    pub _pad: [u32; 2],
-}
-
-/// `Collider` of `shaders/sim/step/common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuCollider {
-    pub point: [f32; 4],
-    pub normal: [f32; 4],
-    pub condition: GpuCondition,
-}
-
-/// `KinematicCollider` of `shaders/sim/step/common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuKinematic {
-    pub shape: u32,
-    pub margin: f32,
-    pub _pad: [u32; 2],
-    pub size: [f32; 4],
-    pub centre: [f32; 4],
-    pub condition: GpuCondition,
-}
-
-/// `KinematicPose` of `shaders/sim/step/common.wgsl`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuPose {
-    pub rotation: [[f32; 4]; 3],
-    pub position: [f32; 4],
-    pub velocity: [f32; 4],
-    pub angular_velocity: [f32; 4],
-}
-
-impl GpuKinematic {
-    fn from_cpu(k: &KinematicCollider) -> Self {
-        let (shape, size) = match k.shape {
-            ColliderShape::Sphere { radius } => (0, [radius, 0.0, 0.0]),
-            ColliderShape::Box { half } => (1, half.to_array()),
-            ColliderShape::Cylinder {
-                radius,
-                half_height,
-            } => (2, [radius, half_height, 0.0]),
-        };
-        GpuKinematic {
-            shape,
-            margin: k.margin as f32,
-            _pad: [0; 2],
-            size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
-            centre: k.centre.as_vec3().extend(0.0).to_array(),
-            condition: GpuCondition::from_cpu(&k.condition),
-        }
-    }
-}
-
-impl GpuPose {
-    fn from_cpu(p: &RigidPose) -> Self {
-        let v4 = |v: DVec3| v.as_vec3().extend(0.0).to_array();
-        GpuPose {
-            rotation: mat3_to_gpu(p.rotation),
-            position: v4(p.position),
-            velocity: v4(p.velocity),
-            angular_velocity: v4(p.angular_velocity),
-        }
-    }
-}
-
-/// `SimStep` of `shaders/sim/step/common.wgsl`: everything constant over a step.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct GpuStep {
-    pub lo: [f32; 3],
-    pub dx: f32,
-    pub gravity: [f32; 3],
-    pub dt: f32,
-    pub cells: [u32; 3],
-    pub num_particles: u32,
-    pub nodes: [u32; 3],
-    pub num_colliders: u32,
-    pub band: u32,
-    pub apic: u32,
-    pub num_kinematic: u32,
-    /// Blocks the grid pool holds (set by `GpuSim`).
-    pub pool_blocks: u32,
-    pub walls: [GpuCondition; 6],
-    pub colliders: [GpuCollider; MAX_COLLIDERS],
-    pub materials: [GpuMaterial; MAX_MATERIALS],
-    pub kinematic: [GpuKinematic; MAX_KINEMATIC],
-    /// Last: rewritten before every substep from [`GpuSim::step`]'s uploaded poses.
-    pub poses: [GpuPose; MAX_KINEMATIC],
-}
-
-impl GpuCondition {
-    fn from_cpu(c: &Condition) -> Self {
-        let kind = match c.kind {
-            BoundaryKind::Sticky => 0,
-            BoundaryKind::Slip => 1,
-            BoundaryKind::Separate => 2,
-        };
-        GpuCondition {
-            kind,
-            friction: c.friction as f32,
-            _pad: [0; 2],
-        }
-    }
-}
-
-impl GpuMaterial {
-    /// The GPU record of `m`: its registered models' codes and parameters.
-    pub fn from_material(m: &Material) -> Self {
-        let lame = m.lame();
-        let kappa = lame.lambda + 2.0 * lame.mu / 3.0;
-        let nacc = match m {
-            Material::Nacc { params, variant } => NaccMaterialGpu::new(params, *variant),
-            Material::Elastic { .. } => NaccMaterialGpu::default(),
-        };
-        GpuMaterial {
-            elastic: m.elastic_model().code(),
-            plastic: m.plastic_model().code(),
-            mu: lame.mu as f32,
-            lambda: lame.lambda as f32,
-            kappa: kappa as f32,
-            nacc,
-        }
-    }
-}
-
-#[derive(Debug, thiserror::Error)]
-pub enum SimSetupError {
-    #[error("{0} materials given; the GPU step supports at most {MAX_MATERIALS}")]
-    TooManyMaterials(usize),
-    #[error("{0} colliders given; the GPU step supports at most {MAX_COLLIDERS}")]
-    TooManyColliders(usize),
-    #[error("{0} moving colliders given; the GPU step supports at most {MAX_KINEMATIC}")]
-    TooManyKinematic(usize),
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-}
-
-impl GpuStep {
-    pub fn new(
-        grid: &Grid,
-        materials: &[Material],
-        params: &StepParams,
-        num_particles: u32,
-    ) -> Result<GpuStep, SimSetupError> {
-        if materials.len() > MAX_MATERIALS {
-            return Err(SimSetupError::TooManyMaterials(materials.len()));
-        }
-        let colliders = &params.boundaries.colliders;
-        if colliders.len() > MAX_COLLIDERS {
-            return Err(SimSetupError::TooManyColliders(colliders.len()));
-        }
-        let mut step = GpuStep {
-            lo: grid.lo.as_vec3().to_array(),
-            dx: grid.dx as f32,
-            gravity: params.gravity.as_vec3().to_array(),
-            dt: params.dt as f32,
-            cells: grid.cells.to_array(),
-            num_particles,
-            nodes: grid.nodes().to_array(),
-            num_colliders: colliders.len() as u32,
-            band: params.boundaries.walls.band,
-            apic: u32::from(params.transfer == Transfer::Apic),
-            num_kinematic: 0,
-            pool_blocks: 0,
-            walls: params
-                .boundaries
-                .walls
-                .faces
-                .map(|c| GpuCondition::from_cpu(&c)),
-            colliders: [GpuCollider::default(); MAX_COLLIDERS],
-            materials: [GpuMaterial::default(); MAX_MATERIALS],
-            kinematic: [GpuKinematic::default(); MAX_KINEMATIC],
-            poses: [GpuPose::default(); MAX_KINEMATIC],
-        };
-        for (slot, c) in step.colliders.iter_mut().zip(colliders) {
-            let n = c.normal.normalize();
-            *slot = GpuCollider {
-                point: [c.point.x as f32, c.point.y as f32, c.point.z as f32, 0.0],
-                normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
-                condition: GpuCondition::from_cpu(&c.condition),
-            };
-        }
-        for (slot, m) in step.materials.iter_mut().zip(materials) {
-            *slot = GpuMaterial::from_material(m);
-        }
-        Ok(step)
-    }
-}
 
 /// What the watchdog counted (particle-steps, summed over the steps since the last read).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -272,19 +42,6 @@ pub struct Watchdog {
     /// Active blocks that found the grid pool full (their nodes were skipped: the steps are
     /// wrong; grow the pool, [`GpuSim::fit_pool`]).
     pub pool_overflow: u32,
-}
-
-/// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
-/// declarations, then the pass.
-fn source(pass: &str) -> String {
-    [
-        wgsl::library().as_str(),
-        include_str!("../../shaders/sim/step/common.wgsl"),
-        models::wgsl().as_str(),
-        include_str!("../../shaders/sim/step/grid_update.wgsl"),
-        pass,
-    ]
-    .join("\n")
 }
 
 /// How P2G sums particle contributions on the grid.
@@ -315,84 +72,6 @@ impl P2gPath {
             P2gPath::Gather
         }
     }
-}
-
-/// The atomic path's passes (built only on adapters with float atomics).
-struct AtomicPasses {
-    mark: Kernel,
-    scatter: Kernel,
-    grid: Kernel,
-}
-
-struct AtomicBinds {
-    mark: wgpu::BindGroup,
-    scatter: wgpu::BindGroup,
-    grid: wgpu::BindGroup,
-}
-
-/// A step pass: its WGSL after the shared modules, entry point `main`.
-fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
-    Kernel::new(device, label, &source(pass), "main")
-}
-
-struct Kernels {
-    prepare: Kernel,
-    mark_blocks: Kernel,
-    compact_blocks: Kernel,
-    p2g: Kernel,
-    g2p: Kernel,
-    ranges: Ranges,
-    sort: RadixSort,
-    scan: Scan,
-}
-
-struct Buffers {
-    step: wgpu::Buffer,
-    x_mass: wgpu::Buffer,
-    v_volume: wgpu::Buffer,
-    deformation: wgpu::Buffer,
-    affine_velocity: wgpu::Buffer,
-    alpha: wgpu::Buffer,
-    material: wgpu::Buffer,
-    keys: wgpu::Buffer,
-    values: wgpu::Buffer,
-    keys_alt: wgpu::Buffer,
-    values_alt: wgpu::Buffer,
-    key_count: wgpu::Buffer,
-    affine: wgpu::Buffer,
-    ranges: wgpu::Buffer,
-    /// The sparse grid's pool: `pool_blocks` × 64 nodes × vec4 (common.wgsl, node_index).
-    grid: wgpu::Buffer,
-    block_flags: wgpu::Buffer,
-    /// Block → pool slot, one u32 per block of the domain.
-    block_slot: wgpu::Buffer,
-    active_blocks: wgpu::Buffer,
-    block_args: wgpu::Buffer,
-    flags: wgpu::Buffer,
-}
-
-struct Binds {
-    prepare: wgpu::BindGroup,
-    mark_blocks: wgpu::BindGroup,
-    compact_blocks: wgpu::BindGroup,
-    sort: SortPlan,
-    ranges: wgpu::BindGroup,
-    p2g: wgpu::BindGroup,
-    g2p: wgpu::BindGroup,
-    atomic: Option<AtomicBinds>,
-}
-
-/// The binding number of `block_slot` in `shaders/sim/step/common.wgsl`.
-const BLOCK_SLOT_BINDING: u32 = 15;
-
-/// Buffers at bindings 0, 1, 2, … and the block slot table at its own binding.
-fn with_slots<'a>(
-    list: &[&'a wgpu::Buffer],
-    slots: &'a wgpu::Buffer,
-) -> Vec<(u32, &'a wgpu::Buffer)> {
-    let mut out: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(list.iter().copied()).collect();
-    out.push((BLOCK_SLOT_BINDING, slots));
-    out
 }
 
 /// Bytes of a grid pool of `blocks` blocks (64 nodes of 16 bytes each).
@@ -427,161 +106,11 @@ fn initial_pool(particles: &Particles, grid: &Grid, blocks: u32) -> u32 {
     (2 * blocks_reached(particles, grid)).max(64).min(blocks)
 }
 
-fn make_binds(
-    device: &wgpu::Device,
-    kernels: &Kernels,
-    atomic: Option<&AtomicPasses>,
-    b: &Buffers,
-    n: u32,
-    sort_bits: u32,
-) -> Binds {
-    let sort = kernels.sort.plan(
-        device,
-        &kernels.scan,
-        &SortBuffers {
-            count: &b.key_count,
-            keys: &b.keys,
-            values: &b.values,
-            keys_alt: &b.keys_alt,
-            values_alt: &b.values_alt,
-        },
-        n.max(1),
-        sort_bits,
-    );
-    let (sorted_keys, sorted_values) = if sort.result_in_alternates() {
-        (&b.keys_alt, &b.values_alt)
-    } else {
-        (&b.keys, &b.values)
-    };
-    let slots = &b.block_slot;
-    let atomic = atomic.map(|a| AtomicBinds {
-        mark: a.mark.bind(device, &[&b.step, &b.x_mass, &b.block_flags]),
-        scatter: a.scatter.bind_at(
-            device,
-            &with_slots(
-                &[&b.step, &b.x_mass, &b.v_volume, &b.affine, &b.grid],
-                slots,
-            ),
-        ),
-        grid: a.grid.bind_at(
-            device,
-            &with_slots(&[&b.step, &b.grid, &b.active_blocks, &b.block_args], slots),
-        ),
-    });
-    Binds {
-        prepare: kernels.prepare.bind(
-            device,
-            &[
-                &b.step,
-                &b.x_mass,
-                &b.v_volume,
-                &b.deformation,
-                &b.affine_velocity,
-                &b.material,
-                &b.keys,
-                &b.values,
-                &b.affine,
-            ],
-        ),
-        ranges: kernels
-            .ranges
-            .kernel
-            .bind(device, &[&b.key_count, sorted_keys, &b.ranges]),
-        mark_blocks: kernels
-            .mark_blocks
-            .bind(device, &[&b.step, sorted_keys, &b.block_flags]),
-        compact_blocks: kernels.compact_blocks.bind_at(
-            device,
-            &with_slots(
-                &[
-                    &b.step,
-                    &b.block_flags,
-                    &b.active_blocks,
-                    &b.block_args,
-                    &b.flags,
-                ],
-                slots,
-            ),
-        ),
-        p2g: kernels.p2g.bind_at(
-            device,
-            &with_slots(
-                &[
-                    &b.step,
-                    &b.ranges,
-                    sorted_values,
-                    &b.x_mass,
-                    &b.v_volume,
-                    &b.affine,
-                    &b.grid,
-                    &b.active_blocks,
-                    &b.block_args,
-                ],
-                slots,
-            ),
-        ),
-        g2p: kernels.g2p.bind_at(
-            device,
-            &with_slots(
-                &[
-                    &b.step,
-                    &b.x_mass,
-                    &b.v_volume,
-                    &b.deformation,
-                    &b.affine_velocity,
-                    &b.alpha,
-                    &b.material,
-                    &b.grid,
-                    &b.flags,
-                ],
-                slots,
-            ),
-        ),
-        sort,
-        atomic,
-    }
-}
-
-/// One pass of the step, for recording and per-pass timing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum StepPass {
-    Clear,
-    Prepare,
-    MarkParticles,
-    Scatter,
-    GridFromSums,
-    Sort,
-    Ranges,
-    MarkBlocks,
-    CompactBlocks,
-    Gather,
-    G2p,
-}
-
-impl StepPass {
-    fn name(self) -> &'static str {
-        match self {
-            StepPass::Clear => "clear",
-            StepPass::Prepare => "prepare",
-            StepPass::MarkParticles => "mark blocks (particles)",
-            StepPass::Scatter => "p2g scatter",
-            StepPass::GridFromSums => "grid from sums",
-            StepPass::Sort => "sort",
-            StepPass::Ranges => "cell ranges",
-            StepPass::MarkBlocks => "mark blocks",
-            StepPass::CompactBlocks => "compact blocks",
-            StepPass::Gather => "p2g gather + grid",
-            StepPass::G2p => "g2p",
-        }
-    }
-}
-
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
 pub struct GpuSim {
     path: P2gPath,
-    atomic: Option<AtomicPasses>,
-    kernels: Kernels,
-    buffers: Buffers,
+    passes: Passes,
+    buffers: StepBuffers,
     binds: Binds,
     num_particles: u32,
     num_blocks: u32,
@@ -595,15 +124,6 @@ pub struct GpuSim {
     /// A copy of the particle state ([`GpuSim::save_state`]), made only while the grid pool
     /// can overflow.
     saved: Option<Vec<wgpu::Buffer>>,
-}
-
-fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
-    let m = m.as_mat3();
-    [
-        m.x_axis.extend(0.0).to_array(),
-        m.y_axis.extend(0.0).to_array(),
-        m.z_axis.extend(0.0).to_array(),
-    ]
 }
 
 fn mat3_from_gpu(m: &[[f32; 4]; 3]) -> DMat3 {
@@ -663,36 +183,7 @@ impl GpuSim {
         let n = particles.len() as u32;
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
-        let kernels = Kernels {
-            prepare: step_kernel(
-                device,
-                "sim prepare",
-                include_str!("../../shaders/sim/step/prepare.wgsl"),
-            ),
-            mark_blocks: step_kernel(
-                device,
-                "sim mark_blocks",
-                include_str!("../../shaders/sim/step/mark_blocks.wgsl"),
-            ),
-            compact_blocks: step_kernel(
-                device,
-                "sim compact_blocks",
-                include_str!("../../shaders/sim/step/compact_blocks.wgsl"),
-            ),
-            p2g: step_kernel(
-                device,
-                "sim p2g",
-                include_str!("../../shaders/sim/step/p2g.wgsl"),
-            ),
-            g2p: step_kernel(
-                device,
-                "sim g2p",
-                include_str!("../../shaders/sim/step/g2p.wgsl"),
-            ),
-            ranges: Ranges::new(device),
-            sort: RadixSort::new(device),
-            scan: Scan::new(device),
-        };
+        let passes = Passes::new(device, path == P2gPath::Atomic);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]
@@ -718,7 +209,7 @@ impl GpuSim {
         let mut step = step;
         step.pool_blocks = pool;
         let nn = u64::from(n);
-        let buffers = Buffers {
+        let buffers = StepBuffers {
             step: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("sim step"),
                 contents: bytemuck::bytes_of(&step),
@@ -752,29 +243,11 @@ impl GpuSim {
             }),
             flags: zeroed(gpu, "sim watchdog flags", 32),
         };
-        let atomic = (path == P2gPath::Atomic).then(|| AtomicPasses {
-            mark: step_kernel(
-                device,
-                "sim mark_particles",
-                include_str!("../../shaders/sim/step/mark_particles.wgsl"),
-            ),
-            scatter: step_kernel(
-                device,
-                "sim p2g_scatter",
-                include_str!("../../shaders/sim/step/p2g_scatter.wgsl"),
-            ),
-            grid: step_kernel(
-                device,
-                "sim grid_from_sums",
-                include_str!("../../shaders/sim/step/grid_from_sums.wgsl"),
-            ),
-        });
         let sort_bits = 32 - base_cells.leading_zeros();
-        let binds = make_binds(device, &kernels, atomic.as_ref(), &buffers, n, sort_bits);
+        let binds = passes.bind(device, &buffers, n, sort_bits);
         Ok(GpuSim {
             path,
-            atomic,
-            kernels,
+            passes,
             buffers,
             binds,
             num_particles: n,
@@ -865,7 +338,7 @@ impl GpuSim {
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
     /// Moving colliders get each substep's pose from one upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
-        let passes = self.passes();
+        let passes = self.passes.list(self.num_particles);
         let poses = self.upload_poses(gpu, steps);
         let mut enc = gpu
             .device
@@ -883,73 +356,11 @@ impl GpuSim {
         gpu.check()
     }
 
-    /// The passes of one step, in order, for this P2G path.
-    fn passes(&self) -> Vec<StepPass> {
-        use StepPass::*;
-        let particles = self.num_particles > 0;
-        let mut list = vec![Clear];
-        if !particles {
-            // Nothing reaches the grid, and there is nothing to move.
-            return list;
-        }
-        list.push(Prepare);
-        match &self.atomic {
-            Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
-            None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
-        }
-        list.push(G2p);
-        list
-    }
-
-    /// Record `passes` (buffer clears first, then the dispatches in one compute pass).
+    /// Record `passes` of one step.
     fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[StepPass]) {
-        let (k, b, bind) = (&self.kernels, &self.buffers, &self.binds);
-        if passes.contains(&StepPass::Clear) {
-            match &self.atomic {
-                Some(_) => enc.clear_buffer(&b.grid, 0, None),
-                None => enc.clear_buffer(&b.ranges, 0, None),
-            }
-            enc.clear_buffer(&b.block_args, 0, None);
-        }
-        let particle_groups = self.num_particles.div_ceil(256);
-        let block_groups = self.num_blocks.div_ceil(256);
-        let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("sim step"),
-            timestamp_writes: None,
-        });
-        for pass in passes {
-            match pass {
-                StepPass::Clear => {}
-                StepPass::Prepare => k.prepare.dispatch(&mut c, &bind.prepare, particle_groups),
-                StepPass::MarkParticles => {
-                    let (a, ab) = self.atomic_passes();
-                    a.mark.dispatch(&mut c, &ab.mark, particle_groups);
-                }
-                StepPass::Scatter => {
-                    let (a, ab) = self.atomic_passes();
-                    a.scatter.dispatch(&mut c, &ab.scatter, particle_groups);
-                }
-                StepPass::GridFromSums => {
-                    let (a, ab) = self.atomic_passes();
-                    a.grid.dispatch_indirect(&mut c, &ab.grid, &b.block_args, 0);
-                }
-                StepPass::Sort => k.sort.record(&mut c, &k.scan, &bind.sort),
-                StepPass::Ranges => k
-                    .ranges
-                    .kernel
-                    .dispatch(&mut c, &bind.ranges, particle_groups),
-                StepPass::MarkBlocks => {
-                    k.mark_blocks
-                        .dispatch(&mut c, &bind.mark_blocks, particle_groups)
-                }
-                StepPass::CompactBlocks => {
-                    k.compact_blocks
-                        .dispatch(&mut c, &bind.compact_blocks, block_groups)
-                }
-                StepPass::Gather => k.p2g.dispatch_indirect(&mut c, &bind.p2g, &b.block_args, 0),
-                StepPass::G2p => k.g2p.dispatch(&mut c, &bind.g2p, particle_groups),
-            }
-        }
+        let sizes = (self.num_particles, self.num_blocks);
+        self.passes
+            .record(enc, &self.binds, &self.buffers, passes, sizes);
     }
 
     /// Milliseconds per step of each pass, over `steps` real steps in which every pass is
@@ -960,7 +371,7 @@ impl GpuSim {
         gpu: &GpuContext,
         steps: u32,
     ) -> Result<Vec<(&'static str, f64)>, GpuError> {
-        let passes = self.passes();
+        let passes = self.passes.list(self.num_particles);
         let mut total = vec![0.0; passes.len()];
         for _ in 0..steps {
             for (pass, t) in passes.iter().zip(&mut total) {
@@ -978,13 +389,6 @@ impl GpuSim {
             .zip(total)
             .map(|(p, t)| (p.name(), t * 1e3 / f64::from(steps)))
             .collect())
-    }
-
-    fn atomic_passes(&self) -> (&AtomicPasses, &AtomicBinds) {
-        match (&self.atomic, &self.binds.atomic) {
-            (Some(a), Some(b)) => (a, b),
-            _ => unreachable!("atomic pass recorded on the gather path"),
-        }
     }
 
     /// Blocks of 4³ nodes the grid pool holds (the sparse grid's capacity).
@@ -1006,10 +410,8 @@ impl GpuSim {
         self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
-        self.binds = make_binds(
+        self.binds = self.passes.bind(
             &gpu.device,
-            &self.kernels,
-            self.atomic.as_ref(),
             &self.buffers,
             self.num_particles,
             self.sort_bits,
@@ -1214,60 +616,5 @@ impl GpuSim {
         out.c = c.iter().map(mat3_from_gpu).collect();
         out.alpha = alpha.iter().map(|a| f64::from(*a)).collect();
         Ok(out)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::gpu::layout_check::assert_layout;
-
-    #[test]
-    fn layouts_match_wgsl() {
-        let src = source("");
-        assert_layout!(
-            &src,
-            GpuMaterial,
-            "SimMaterial",
-            [elastic, plastic, mu, lambda, kappa, nacc]
-        );
-        assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
-        assert_layout!(&src, GpuCollider, "Collider", [point, normal, condition]);
-        assert_layout!(
-            &src,
-            GpuStep,
-            "SimStep",
-            [
-                lo,
-                dx,
-                gravity,
-                dt,
-                cells,
-                num_particles,
-                nodes,
-                num_colliders,
-                band,
-                apic,
-                num_kinematic,
-                pool_blocks,
-                walls,
-                colliders,
-                materials,
-                kinematic,
-                poses
-            ]
-        );
-        assert_layout!(
-            &src,
-            GpuKinematic,
-            "KinematicCollider",
-            [shape, margin, size, centre, condition]
-        );
-        assert_layout!(
-            &src,
-            GpuPose,
-            "KinematicPose",
-            [rotation, position, velocity, angular_velocity]
-        );
     }
 }

@@ -34,6 +34,7 @@ pub mod models;
 pub mod nacc;
 pub mod params;
 pub mod particles;
+pub mod step;
 pub mod svd;
 pub mod wgsl;
 

@@ -1,0 +1,38 @@
+//! `shaders/sim/step/compact_blocks.wgsl`: per block of the domain: list the flagged
+//! blocks, give each a pool slot, and write the node passes' dispatch size.
+
+use crate::gpu::Kernel;
+
+use super::{step_kernel, StepBuffers};
+
+pub(crate) struct CompactBlocks {
+    kernel: Kernel,
+}
+
+impl CompactBlocks {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let src = include_str!("../../../shaders/sim/step/compact_blocks.wgsl");
+        CompactBlocks {
+            kernel: step_kernel(device, "sim compact_blocks", src),
+        }
+    }
+
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
+        self.kernel.bind_named(
+            device,
+            &[
+                ("step", &b.step),
+                ("block_flags", &b.block_flags),
+                ("active_blocks", &b.active_blocks),
+                ("block_args", &b.block_args),
+                ("flags", &b.flags),
+                ("block_slot", &b.block_slot),
+            ],
+        )
+    }
+
+    /// One invocation per block of the domain.
+    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, blocks: u32) {
+        self.kernel.dispatch(c, bind, blocks.div_ceil(256));
+    }
+}

@@ -1,0 +1,37 @@
+//! `shaders/sim/step/grid_from_sums.wgsl`: per node of the active blocks: velocity from the
+//! scattered sums, then the grid update (atomic path).
+
+use crate::gpu::Kernel;
+
+use super::{step_kernel, StepBuffers};
+
+pub(crate) struct GridFromSums {
+    kernel: Kernel,
+}
+
+impl GridFromSums {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let src = include_str!("../../../shaders/sim/step/grid_from_sums.wgsl");
+        GridFromSums {
+            kernel: step_kernel(device, "sim grid_from_sums", src),
+        }
+    }
+
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
+        self.kernel.bind_named(
+            device,
+            &[
+                ("step", &b.step),
+                ("grid", &b.grid),
+                ("active_blocks", &b.active_blocks),
+                ("block_args", &b.block_args),
+                ("block_slot", &b.block_slot),
+            ],
+        )
+    }
+
+    /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.
+    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, b: &StepBuffers) {
+        self.kernel.dispatch_indirect(c, bind, &b.block_args, 0);
+    }
+}

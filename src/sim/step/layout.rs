@@ -1,0 +1,292 @@
+//! The step's constants as the GPU holds them (`SimStep` and its members in
+//! `shaders/sim/step/common.wgsl`, `SimMaterial` in `shaders/sim/material.wgsl`), mirrored
+//! by `#[repr(C)]` types; `tests::layouts_match_wgsl` checks sizes and offsets with naga.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DMat3, DVec3};
+
+use crate::gpu::GpuError;
+use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
+use crate::sim::wgsl::NaccMaterialGpu;
+use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams, Transfer};
+
+pub const MAX_MATERIALS: usize = 16;
+pub const MAX_COLLIDERS: usize = 8;
+/// Moving colliders (`MAX_KINEMATIC` in `shaders/sim/step/common.wgsl`).
+pub const MAX_KINEMATIC: usize = 4;
+
+/// A 3×3 matrix as WGSL's `mat3x3<f32>` stores it: three columns padded to vec4.
+pub(crate) fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
+    let m = m.as_mat3();
+    [
+        m.x_axis.extend(0.0).to_array(),
+        m.y_axis.extend(0.0).to_array(),
+        m.z_axis.extend(0.0).to_array(),
+    ]
+}
+
+/// `SimMaterial` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// `ElasticModel::code`.
+    pub elastic: u32,
+    /// `PlasticModel::code`.
+    pub plastic: u32,
+    pub mu: f32,
+    pub lambda: f32,
+    pub kappa: f32,
+    pub nacc: NaccMaterialGpu,
+}
+
+/// `Condition` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuCondition {
+    pub kind: u32,
+    pub friction: f32,
+    pub _pad: [u32; 2],
+}
+
+/// `Collider` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuCollider {
+    pub point: [f32; 4],
+    pub normal: [f32; 4],
+    pub condition: GpuCondition,
+}
+
+/// `KinematicCollider` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuKinematic {
+    pub shape: u32,
+    pub margin: f32,
+    pub _pad: [u32; 2],
+    pub size: [f32; 4],
+    pub centre: [f32; 4],
+    pub condition: GpuCondition,
+}
+
+/// `KinematicPose` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuPose {
+    pub rotation: [[f32; 4]; 3],
+    pub position: [f32; 4],
+    pub velocity: [f32; 4],
+    pub angular_velocity: [f32; 4],
+}
+
+impl GpuKinematic {
+    pub(crate) fn from_cpu(k: &KinematicCollider) -> Self {
+        let (shape, size) = match k.shape {
+            ColliderShape::Sphere { radius } => (0, [radius, 0.0, 0.0]),
+            ColliderShape::Box { half } => (1, half.to_array()),
+            ColliderShape::Cylinder {
+                radius,
+                half_height,
+            } => (2, [radius, half_height, 0.0]),
+        };
+        GpuKinematic {
+            shape,
+            margin: k.margin as f32,
+            _pad: [0; 2],
+            size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
+            centre: k.centre.as_vec3().extend(0.0).to_array(),
+            condition: GpuCondition::from_cpu(&k.condition),
+        }
+    }
+}
+
+impl GpuPose {
+    pub(crate) fn from_cpu(p: &RigidPose) -> Self {
+        let v4 = |v: DVec3| v.as_vec3().extend(0.0).to_array();
+        GpuPose {
+            rotation: mat3_to_gpu(p.rotation),
+            position: v4(p.position),
+            velocity: v4(p.velocity),
+            angular_velocity: v4(p.angular_velocity),
+        }
+    }
+}
+
+/// `SimStep` of `shaders/sim/step/common.wgsl`: everything constant over a step.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuStep {
+    pub lo: [f32; 3],
+    pub dx: f32,
+    pub gravity: [f32; 3],
+    pub dt: f32,
+    pub cells: [u32; 3],
+    pub num_particles: u32,
+    pub nodes: [u32; 3],
+    pub num_colliders: u32,
+    pub band: u32,
+    pub apic: u32,
+    pub num_kinematic: u32,
+    /// Blocks the grid pool holds (set by `GpuSim`).
+    pub pool_blocks: u32,
+    pub walls: [GpuCondition; 6],
+    pub colliders: [GpuCollider; MAX_COLLIDERS],
+    pub materials: [GpuMaterial; MAX_MATERIALS],
+    pub kinematic: [GpuKinematic; MAX_KINEMATIC],
+    /// Last: rewritten before every substep from [`GpuSim::step`]'s uploaded poses.
+    pub poses: [GpuPose; MAX_KINEMATIC],
+}
+
+impl GpuCondition {
+    fn from_cpu(c: &Condition) -> Self {
+        let kind = match c.kind {
+            BoundaryKind::Sticky => 0,
+            BoundaryKind::Slip => 1,
+            BoundaryKind::Separate => 2,
+        };
+        GpuCondition {
+            kind,
+            friction: c.friction as f32,
+            _pad: [0; 2],
+        }
+    }
+}
+
+impl GpuMaterial {
+    /// The GPU record of `m`: its registered models' codes and parameters.
+    pub fn from_material(m: &Material) -> Self {
+        let lame = m.lame();
+        let kappa = lame.lambda + 2.0 * lame.mu / 3.0;
+        let nacc = match m {
+            Material::Nacc { params, variant } => NaccMaterialGpu::new(params, *variant),
+            Material::Elastic { .. } => NaccMaterialGpu::default(),
+        };
+        GpuMaterial {
+            elastic: m.elastic_model().code(),
+            plastic: m.plastic_model().code(),
+            mu: lame.mu as f32,
+            lambda: lame.lambda as f32,
+            kappa: kappa as f32,
+            nacc,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum SimSetupError {
+    #[error("{0} materials given; the GPU step supports at most {MAX_MATERIALS}")]
+    TooManyMaterials(usize),
+    #[error("{0} colliders given; the GPU step supports at most {MAX_COLLIDERS}")]
+    TooManyColliders(usize),
+    #[error("{0} moving colliders given; the GPU step supports at most {MAX_KINEMATIC}")]
+    TooManyKinematic(usize),
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+}
+
+impl GpuStep {
+    pub fn new(
+        grid: &Grid,
+        materials: &[Material],
+        params: &StepParams,
+        num_particles: u32,
+    ) -> Result<GpuStep, SimSetupError> {
+        if materials.len() > MAX_MATERIALS {
+            return Err(SimSetupError::TooManyMaterials(materials.len()));
+        }
+        let colliders = &params.boundaries.colliders;
+        if colliders.len() > MAX_COLLIDERS {
+            return Err(SimSetupError::TooManyColliders(colliders.len()));
+        }
+        let mut step = GpuStep {
+            lo: grid.lo.as_vec3().to_array(),
+            dx: grid.dx as f32,
+            gravity: params.gravity.as_vec3().to_array(),
+            dt: params.dt as f32,
+            cells: grid.cells.to_array(),
+            num_particles,
+            nodes: grid.nodes().to_array(),
+            num_colliders: colliders.len() as u32,
+            band: params.boundaries.walls.band,
+            apic: u32::from(params.transfer == Transfer::Apic),
+            num_kinematic: 0,
+            pool_blocks: 0,
+            walls: params
+                .boundaries
+                .walls
+                .faces
+                .map(|c| GpuCondition::from_cpu(&c)),
+            colliders: [GpuCollider::default(); MAX_COLLIDERS],
+            materials: [GpuMaterial::default(); MAX_MATERIALS],
+            kinematic: [GpuKinematic::default(); MAX_KINEMATIC],
+            poses: [GpuPose::default(); MAX_KINEMATIC],
+        };
+        for (slot, c) in step.colliders.iter_mut().zip(colliders) {
+            let n = c.normal.normalize();
+            *slot = GpuCollider {
+                point: [c.point.x as f32, c.point.y as f32, c.point.z as f32, 0.0],
+                normal: [n.x as f32, n.y as f32, n.z as f32, 0.0],
+                condition: GpuCondition::from_cpu(&c.condition),
+            };
+        }
+        for (slot, m) in step.materials.iter_mut().zip(materials) {
+            *slot = GpuMaterial::from_material(m);
+        }
+        Ok(step)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn layouts_match_wgsl() {
+        let src = super::super::source("");
+        assert_layout!(
+            &src,
+            GpuMaterial,
+            "SimMaterial",
+            [elastic, plastic, mu, lambda, kappa, nacc]
+        );
+        assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
+        assert_layout!(&src, GpuCollider, "Collider", [point, normal, condition]);
+        assert_layout!(
+            &src,
+            GpuStep,
+            "SimStep",
+            [
+                lo,
+                dx,
+                gravity,
+                dt,
+                cells,
+                num_particles,
+                nodes,
+                num_colliders,
+                band,
+                apic,
+                num_kinematic,
+                pool_blocks,
+                walls,
+                colliders,
+                materials,
+                kinematic,
+                poses
+            ]
+        );
+        assert_layout!(
+            &src,
+            GpuKinematic,
+            "KinematicCollider",
+            [shape, margin, size, centre, condition]
+        );
+        assert_layout!(
+            &src,
+            GpuPose,
+            "KinematicPose",
+            [rotation, position, velocity, angular_velocity]
+        );
+    }
+}

@@ -1,0 +1,313 @@
+//! The passes of one explicit MPM step on the GPU (docs/method.md §2), one Rust type per
+//! WGSL file under `shaders/sim/step/`, each owning its pipeline and binding its buffers
+//! by the names its WGSL declares. One step, on the gather path (every adapter):
+//!
+//! 1. [`Prepare`] — per particle: base-cell sort key and the affine term
+//!    m C − Δt V⁰ (4/Δx²) τ(F);
+//! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
+//! 3. [`Ranges`] — each cell's run of particles (the GPU primitive the renderer also uses
+//!    for its tiles);
+//! 4. [`MarkBlocks`], [`CompactBlocks`] — the blocks of 4³ nodes an occupied cell's
+//!    stencils reach, listed with a pool slot each (the node passes run only there);
+//! 5. [`P2gGather`] — per node of the active blocks: gather mass and momentum from the
+//!    27 cells whose stencils reach it (deterministic, no atomics), then the grid update
+//!    (`grid_update.wgsl`: velocity, gravity, colliders, walls);
+//! 6. [`G2p`] — velocities, C, F, positions, the material's plasticity.
+//!
+//! Where the adapter has float atomics, steps 2–5 are instead [`MarkParticles`] (each
+//! particle flags the blocks of its stencil), [`CompactBlocks`], [`P2gScatter`] (each
+//! particle adds to its 27 nodes) and [`GridFromSums`] (the grid update on the active
+//! blocks). [`Passes::list`] is that algorithm; [`Passes::record`] records it.
+
+mod compact_blocks;
+mod g2p;
+mod grid_from_sums;
+pub mod layout;
+mod mark_blocks;
+mod mark_particles;
+mod p2g;
+mod p2g_scatter;
+mod prepare;
+
+pub(crate) use compact_blocks::CompactBlocks;
+pub(crate) use g2p::G2p;
+pub(crate) use grid_from_sums::GridFromSums;
+pub(crate) use mark_blocks::MarkBlocks;
+pub(crate) use mark_particles::MarkParticles;
+pub(crate) use p2g::P2gGather;
+pub(crate) use p2g_scatter::P2gScatter;
+pub(crate) use prepare::Prepare;
+
+use crate::gpu::ranges::Ranges;
+use crate::gpu::scan::Scan;
+use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+use crate::gpu::Kernel;
+
+/// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
+/// declarations, the material models and their dispatch, then the pass.
+pub(crate) fn source(pass: &str) -> String {
+    [
+        crate::sim::wgsl::library().as_str(),
+        include_str!("../../../shaders/sim/step/common.wgsl"),
+        crate::sim::models::wgsl().as_str(),
+        include_str!("../../../shaders/sim/step/grid_update.wgsl"),
+        pass,
+    ]
+    .join("\n")
+}
+
+/// A step pass: its WGSL after the shared modules, entry point `main`.
+fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
+    Kernel::new(device, label, &source(pass), "main")
+}
+
+/// The buffers of the step, named as the passes' WGSL names them where it can.
+pub(crate) struct StepBuffers {
+    pub step: wgpu::Buffer,
+    pub x_mass: wgpu::Buffer,
+    pub v_volume: wgpu::Buffer,
+    pub deformation: wgpu::Buffer,
+    pub affine_velocity: wgpu::Buffer,
+    pub alpha: wgpu::Buffer,
+    pub material: wgpu::Buffer,
+    /// Cell keys and particle values before the sort, and the sort's alternates.
+    pub keys: wgpu::Buffer,
+    pub values: wgpu::Buffer,
+    pub keys_alt: wgpu::Buffer,
+    pub values_alt: wgpu::Buffer,
+    pub key_count: wgpu::Buffer,
+    pub affine: wgpu::Buffer,
+    pub ranges: wgpu::Buffer,
+    /// The sparse grid's pool: `pool_blocks` × 64 nodes × vec4 (common.wgsl, node_index).
+    pub grid: wgpu::Buffer,
+    pub block_flags: wgpu::Buffer,
+    /// Block → pool slot, one u32 per block of the domain.
+    pub block_slot: wgpu::Buffer,
+    pub active_blocks: wgpu::Buffer,
+    pub block_args: wgpu::Buffer,
+    pub flags: wgpu::Buffer,
+}
+
+/// The sorted cell keys and particle indices (in the sort's primary or alternate buffers).
+pub(crate) struct Sorted<'a> {
+    pub keys: &'a wgpu::Buffer,
+    pub values: &'a wgpu::Buffer,
+}
+
+/// The pipelines of the step; the atomic path's only on adapters with float atomics.
+pub(crate) struct Passes {
+    prepare: Prepare,
+    sort: RadixSort,
+    scan: Scan,
+    ranges: Ranges,
+    mark_blocks: MarkBlocks,
+    compact_blocks: CompactBlocks,
+    gather: P2gGather,
+    g2p: G2p,
+    atomic: Option<AtomicPasses>,
+}
+
+struct AtomicPasses {
+    mark: MarkParticles,
+    scatter: P2gScatter,
+    grid: GridFromSums,
+}
+
+/// The bind groups of [`Passes`] over one set of [`StepBuffers`].
+pub(crate) struct Binds {
+    prepare: wgpu::BindGroup,
+    sort: SortPlan,
+    ranges: wgpu::BindGroup,
+    mark_blocks: wgpu::BindGroup,
+    compact_blocks: wgpu::BindGroup,
+    gather: wgpu::BindGroup,
+    g2p: wgpu::BindGroup,
+    atomic: Option<AtomicBinds>,
+}
+
+struct AtomicBinds {
+    mark: wgpu::BindGroup,
+    scatter: wgpu::BindGroup,
+    grid: wgpu::BindGroup,
+}
+
+/// One pass of the step, for recording and per-pass timing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StepPass {
+    Clear,
+    Prepare,
+    MarkParticles,
+    Scatter,
+    GridFromSums,
+    Sort,
+    Ranges,
+    MarkBlocks,
+    CompactBlocks,
+    Gather,
+    G2p,
+}
+
+impl StepPass {
+    pub fn name(self) -> &'static str {
+        match self {
+            StepPass::Clear => "clear",
+            StepPass::Prepare => "prepare",
+            StepPass::MarkParticles => "mark blocks (particles)",
+            StepPass::Scatter => "p2g scatter",
+            StepPass::GridFromSums => "grid from sums",
+            StepPass::Sort => "sort",
+            StepPass::Ranges => "cell ranges",
+            StepPass::MarkBlocks => "mark blocks",
+            StepPass::CompactBlocks => "compact blocks",
+            StepPass::Gather => "p2g gather + grid",
+            StepPass::G2p => "g2p",
+        }
+    }
+}
+
+impl Passes {
+    /// Compile the passes; the atomic path's with `atomic`.
+    pub fn new(device: &wgpu::Device, atomic: bool) -> Passes {
+        Passes {
+            prepare: Prepare::new(device),
+            sort: RadixSort::new(device),
+            scan: Scan::new(device),
+            ranges: Ranges::new(device),
+            mark_blocks: MarkBlocks::new(device),
+            compact_blocks: CompactBlocks::new(device),
+            gather: P2gGather::new(device),
+            g2p: G2p::new(device),
+            atomic: atomic.then(|| AtomicPasses {
+                mark: MarkParticles::new(device),
+                scatter: P2gScatter::new(device),
+                grid: GridFromSums::new(device),
+            }),
+        }
+    }
+
+    /// Bind every pass to `b`, for `n` particles sorted by keys of `sort_bits` bits.
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, n: u32, sort_bits: u32) -> Binds {
+        let sort = self.sort.plan(
+            device,
+            &self.scan,
+            &SortBuffers {
+                count: &b.key_count,
+                keys: &b.keys,
+                values: &b.values,
+                keys_alt: &b.keys_alt,
+                values_alt: &b.values_alt,
+            },
+            n.max(1),
+            sort_bits,
+        );
+        let sorted = if sort.result_in_alternates() {
+            Sorted {
+                keys: &b.keys_alt,
+                values: &b.values_alt,
+            }
+        } else {
+            Sorted {
+                keys: &b.keys,
+                values: &b.values,
+            }
+        };
+        Binds {
+            prepare: self.prepare.bind(device, b),
+            ranges: self
+                .ranges
+                .kernel
+                .bind(device, &[&b.key_count, sorted.keys, &b.ranges]),
+            mark_blocks: self.mark_blocks.bind(device, b, &sorted),
+            compact_blocks: self.compact_blocks.bind(device, b),
+            gather: self.gather.bind(device, b, &sorted),
+            g2p: self.g2p.bind(device, b),
+            atomic: self.atomic.as_ref().map(|a| AtomicBinds {
+                mark: a.mark.bind(device, b),
+                scatter: a.scatter.bind(device, b),
+                grid: a.grid.bind(device, b),
+            }),
+            sort,
+        }
+    }
+
+    /// The passes of one step, in order.
+    pub fn list(&self, particles: u32) -> Vec<StepPass> {
+        use StepPass::*;
+        let mut list = vec![Clear];
+        if particles == 0 {
+            // Nothing reaches the grid, and there is nothing to move.
+            return list;
+        }
+        list.push(Prepare);
+        match &self.atomic {
+            Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
+            None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
+        }
+        list.push(G2p);
+        list
+    }
+
+    /// Record `passes` (buffer clears first, then the dispatches in one compute pass) for
+    /// `particles` particles on a domain of `blocks` blocks.
+    pub fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        binds: &Binds,
+        b: &StepBuffers,
+        passes: &[StepPass],
+        (particles, blocks): (u32, u32),
+    ) {
+        if passes.contains(&StepPass::Clear) {
+            match &self.atomic {
+                Some(_) => enc.clear_buffer(&b.grid, 0, None),
+                None => enc.clear_buffer(&b.ranges, 0, None),
+            }
+            enc.clear_buffer(&b.block_args, 0, None);
+        }
+        let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("sim step"),
+            timestamp_writes: None,
+        });
+        for pass in passes {
+            match pass {
+                StepPass::Clear => {}
+                StepPass::Prepare => self.prepare.record(&mut c, &binds.prepare, particles),
+                StepPass::MarkParticles => {
+                    let (a, ab) = self.atomic_passes(binds);
+                    a.mark.record(&mut c, &ab.mark, particles);
+                }
+                StepPass::Scatter => {
+                    let (a, ab) = self.atomic_passes(binds);
+                    a.scatter.record(&mut c, &ab.scatter, particles);
+                }
+                StepPass::GridFromSums => {
+                    let (a, ab) = self.atomic_passes(binds);
+                    a.grid.record(&mut c, &ab.grid, b);
+                }
+                StepPass::Sort => self.sort.record(&mut c, &self.scan, &binds.sort),
+                StepPass::Ranges => {
+                    self.ranges
+                        .kernel
+                        .dispatch(&mut c, &binds.ranges, particles.div_ceil(256))
+                }
+                StepPass::MarkBlocks => {
+                    self.mark_blocks
+                        .record(&mut c, &binds.mark_blocks, particles)
+                }
+                StepPass::CompactBlocks => {
+                    self.compact_blocks
+                        .record(&mut c, &binds.compact_blocks, blocks)
+                }
+                StepPass::Gather => self.gather.record(&mut c, &binds.gather, b),
+                StepPass::G2p => self.g2p.record(&mut c, &binds.g2p, particles),
+            }
+        }
+    }
+
+    fn atomic_passes<'a>(&'a self, binds: &'a Binds) -> (&'a AtomicPasses, &'a AtomicBinds) {
+        match (&self.atomic, &binds.atomic) {
+            (Some(a), Some(b)) => (a, b),
+            _ => unreachable!("atomic pass recorded on the gather path"),
+        }
+    }
+}

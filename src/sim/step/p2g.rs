@@ -1,0 +1,43 @@
+//! `shaders/sim/step/p2g.wgsl`: per node of the active blocks: gather mass and momentum
+//! from the 27 cells whose stencils reach it, in a fixed order (deterministic, no atomics),
+//! then the grid update.
+
+use crate::gpu::Kernel;
+
+use super::{step_kernel, Sorted, StepBuffers};
+
+pub(crate) struct P2gGather {
+    kernel: Kernel,
+}
+
+impl P2gGather {
+    pub fn new(device: &wgpu::Device) -> Self {
+        let src = include_str!("../../../shaders/sim/step/p2g.wgsl");
+        P2gGather {
+            kernel: step_kernel(device, "sim p2g", src),
+        }
+    }
+
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
+        self.kernel.bind_named(
+            device,
+            &[
+                ("step", &b.step),
+                ("ranges", &b.ranges),
+                ("cell_values", sorted.values),
+                ("x_mass", &b.x_mass),
+                ("v_volume", &b.v_volume),
+                ("affine", &b.affine),
+                ("grid", &b.grid),
+                ("active_blocks", &b.active_blocks),
+                ("block_args", &b.block_args),
+                ("block_slot", &b.block_slot),
+            ],
+        )
+    }
+
+    /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.
+    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, b: &StepBuffers) {
+        self.kernel.dispatch_indirect(c, bind, &b.block_args, 0);
+    }
+}
