@@ -9,6 +9,7 @@ pub(crate) mod layout_check;
 pub mod ranges;
 pub mod scan;
 pub mod sort;
+pub mod stages;
 
 pub use kernel::{dispatch_1d, Kernel};
 

@@ -21,6 +21,7 @@ use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
 use super::step::{Binds, Passes, StepBuffers, StepPass};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
+use crate::gpu::stages;
 use crate::gpu::{GpuContext, GpuError};
 
 pub use super::step::layout::{
@@ -356,11 +357,14 @@ impl GpuSim {
         gpu.check()
     }
 
-    /// Record `passes` of one step.
+    /// Record one step: its clears, then `passes` in one compute pass.
     fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[StepPass]) {
+        self.passes.clear(enc, &self.buffers);
         let sizes = (self.num_particles, self.num_blocks);
-        self.passes
-            .record(enc, &self.binds, &self.buffers, passes, sizes);
+        let list = self
+            .passes
+            .stages(&self.binds, &self.buffers, passes, sizes);
+        stages::record(enc, "sim step", &list);
     }
 
     /// Milliseconds per step of each pass, over `steps` real steps in which every pass is
@@ -372,22 +376,24 @@ impl GpuSim {
         steps: u32,
     ) -> Result<Vec<(&'static str, f64)>, GpuError> {
         let passes = self.passes.list(self.num_particles);
-        let mut total = vec![0.0; passes.len()];
+        let sizes = (self.num_particles, self.num_blocks);
+        let list = self
+            .passes
+            .stages(&self.binds, &self.buffers, &passes, sizes);
+        let mut total: Vec<(&'static str, f64)> = list.iter().map(|s| (s.name, 0.0)).collect();
         for _ in 0..steps {
-            for (pass, t) in passes.iter().zip(&mut total) {
-                let mut enc = gpu.device.create_command_encoder(&Default::default());
-                self.record(&mut enc, &[*pass]);
-                let start = std::time::Instant::now();
-                gpu.queue.submit([enc.finish()]);
-                gpu.wait()?;
-                *t += start.elapsed().as_secs_f64();
+            // The clears, untimed (as the renderer's), then each stage alone.
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            self.passes.clear(&mut enc, &self.buffers);
+            gpu.queue.submit([enc.finish()]);
+            for (t, (_, ms)) in total.iter_mut().zip(stages::profile(gpu, &list)?) {
+                t.1 += ms;
             }
         }
         gpu.check()?;
-        Ok(passes
-            .iter()
-            .zip(total)
-            .map(|(p, t)| (p.name(), t * 1e3 / f64::from(steps)))
+        Ok(total
+            .into_iter()
+            .map(|(name, ms)| (name, ms / f64::from(steps)))
             .collect())
     }
 

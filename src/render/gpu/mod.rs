@@ -25,6 +25,7 @@ use crate::gpu::buffers::storage;
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+use crate::gpu::stages::{self, Stage};
 use crate::gpu::{GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
@@ -628,71 +629,54 @@ impl GpuRenderer {
             .as_ref()
             .filter(|_| s.count > 0)
             .map(|l| self.lighting_binds(gpu, l));
-        type Stage<'a> = (&'static str, Box<dyn Fn(&mut wgpu::ComputePass) + 'a>);
         let mut stages: Vec<Stage> = Vec::new();
         if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
             gpu.queue
                 .write_buffer(&l.lights, 0, bytemuck::bytes_of(&l.uniforms()));
             if l.grid.is_some() {
                 let items = l.transmit_items();
-                stages.push((
-                    "shadows",
-                    Box::new(move |c| {
-                        l.splat.dispatch(c, &b.splat, groups);
-                        if items > 0 {
-                            l.transmit.dispatch(c, &b.transmit, items.div_ceil(256));
-                        }
-                    }),
-                ));
+                stages.push(Stage::new("shadows", move |c| {
+                    l.splat.dispatch(c, &b.splat, groups);
+                    if items > 0 {
+                        l.transmit.dispatch(c, &b.transmit, items.div_ceil(256));
+                    }
+                }));
             }
         }
         if s.count > 0 {
-            stages.push((
-                "project",
-                Box::new(|c| self.project.kernel.dispatch(c, &p.project, groups)),
-            ));
+            stages.push(Stage::new("project", |c| {
+                self.project.kernel.dispatch(c, &p.project, groups)
+            }));
         }
         if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
-            stages.push((
-                "shade",
-                Box::new(move |c| l.shade.dispatch(c, &b.shade, groups)),
-            ));
+            stages.push(Stage::new("shade", move |c| {
+                l.shade.dispatch(c, &b.shade, groups)
+            }));
         }
         if s.count > 0 {
-            stages.push((
-                "depth sort",
-                Box::new(|c| self.sort.record(c, &self.scan, &p.depth_sort)),
-            ));
-            stages.push((
-                "tile keys",
-                Box::new(|c| {
-                    self.tile_keys.gather.dispatch(c, &p.gather, groups);
-                    self.scan.record(c, &p.offsets_scan);
-                    self.tile_keys.total.dispatch(c, &p.total, 1);
-                    self.tile_keys.emit.dispatch(c, &p.emit, groups);
-                }),
-            ));
-            stages.push((
-                "tile sort",
-                Box::new(|c| self.sort.record(c, &self.scan, &p.tile_sort)),
-            ));
-            stages.push((
-                "tile ranges",
-                Box::new(|c| {
-                    self.tile_ranges
-                        .kernel
-                        .dispatch(c, &p.ranges, f.capacity.div_ceil(256))
-                }),
-            ));
-        }
-        stages.push((
-            "rasterize",
-            Box::new(|c| {
-                self.rasterize
+            stages.push(Stage::new("depth sort", |c| {
+                self.sort.record(c, &self.scan, &p.depth_sort)
+            }));
+            stages.push(Stage::new("tile keys", |c| {
+                self.tile_keys.gather.dispatch(c, &p.gather, groups);
+                self.scan.record(c, &p.offsets_scan);
+                self.tile_keys.total.dispatch(c, &p.total, 1);
+                self.tile_keys.emit.dispatch(c, &p.emit, groups);
+            }));
+            stages.push(Stage::new("tile sort", |c| {
+                self.sort.record(c, &self.scan, &p.tile_sort)
+            }));
+            stages.push(Stage::new("tile ranges", |c| {
+                self.tile_ranges
                     .kernel
-                    .dispatch_2d(c, &p.rasterize, frame.tiles_x, frame.tiles_y)
-            }),
-        ));
+                    .dispatch(c, &p.ranges, f.capacity.div_ceil(256))
+            }));
+        }
+        stages.push(Stage::new("rasterize", |c| {
+            self.rasterize
+                .kernel
+                .dispatch_2d(c, &p.rasterize, frame.tiles_x, frame.tiles_y)
+        }));
 
         let mut enc = gpu
             .device
@@ -710,24 +694,9 @@ impl GpuRenderer {
         let mut passes = Vec::new();
         if self.profile {
             gpu.queue.submit([enc.finish()]);
-            for (name, record) in &stages {
-                let t = std::time::Instant::now();
-                let mut enc = gpu.device.create_command_encoder(&Default::default());
-                record(&mut enc.begin_compute_pass(&Default::default()));
-                gpu.queue.submit([enc.finish()]);
-                gpu.wait()?;
-                passes.push((*name, t.elapsed().as_secs_f64() * 1e3));
-            }
+            passes = stages::profile(gpu, &stages)?;
         } else {
-            {
-                let mut cpass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("render"),
-                    timestamp_writes: None,
-                });
-                for (_, record) in &stages {
-                    record(&mut cpass);
-                }
-            }
+            stages::record(&mut enc, "render", &stages);
             gpu.queue.submit([enc.finish()]);
         }
         gpu.wait()?;

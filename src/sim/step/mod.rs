@@ -17,7 +17,8 @@
 //! Where the adapter has float atomics, steps 2–5 are instead [`MarkParticles`] (each
 //! particle flags the blocks of its stencil), [`CompactBlocks`], [`P2gScatter`] (each
 //! particle adds to its 27 nodes) and [`GridFromSums`] (the grid update on the active
-//! blocks). [`Passes::list`] is that algorithm; [`Passes::record`] records it.
+//! blocks). [`Passes::list`] is that algorithm; [`Passes::stages`] records it through the
+//! same named stages the renderer uses (`gpu::stages`).
 
 mod compact_blocks;
 mod g2p;
@@ -41,6 +42,7 @@ pub(crate) use prepare::Prepare;
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::Scan;
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+use crate::gpu::stages::Stage;
 use crate::gpu::Kernel;
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
@@ -247,61 +249,60 @@ impl Passes {
         list
     }
 
-    /// Record `passes` (buffer clears first, then the dispatches in one compute pass) for
-    /// `particles` particles on a domain of `blocks` blocks.
-    pub fn record(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        binds: &Binds,
-        b: &StepBuffers,
+    /// The buffer clears a step starts with (outside any compute pass).
+    pub fn clear(&self, enc: &mut wgpu::CommandEncoder, b: &StepBuffers) {
+        match &self.atomic {
+            Some(_) => enc.clear_buffer(&b.grid, 0, None),
+            None => enc.clear_buffer(&b.ranges, 0, None),
+        }
+        enc.clear_buffer(&b.block_args, 0, None);
+    }
+
+    /// The dispatches of `passes` as named stages, for `particles` particles on a domain
+    /// of `blocks` blocks (`StepPass::Clear` is [`Passes::clear`], not a stage).
+    pub fn stages<'a>(
+        &'a self,
+        binds: &'a Binds,
+        b: &'a StepBuffers,
         passes: &[StepPass],
         (particles, blocks): (u32, u32),
-    ) {
-        if passes.contains(&StepPass::Clear) {
-            match &self.atomic {
-                Some(_) => enc.clear_buffer(&b.grid, 0, None),
-                None => enc.clear_buffer(&b.ranges, 0, None),
-            }
-            enc.clear_buffer(&b.block_args, 0, None);
-        }
-        let mut c = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("sim step"),
-            timestamp_writes: None,
-        });
-        for pass in passes {
-            match pass {
-                StepPass::Clear => {}
-                StepPass::Prepare => self.prepare.record(&mut c, &binds.prepare, particles),
-                StepPass::MarkParticles => {
-                    let (a, ab) = self.atomic_passes(binds);
-                    a.mark.record(&mut c, &ab.mark, particles);
-                }
-                StepPass::Scatter => {
-                    let (a, ab) = self.atomic_passes(binds);
-                    a.scatter.record(&mut c, &ab.scatter, particles);
-                }
-                StepPass::GridFromSums => {
-                    let (a, ab) = self.atomic_passes(binds);
-                    a.grid.record(&mut c, &ab.grid, b);
-                }
-                StepPass::Sort => self.sort.record(&mut c, &self.scan, &binds.sort),
-                StepPass::Ranges => {
-                    self.ranges
-                        .kernel
-                        .dispatch(&mut c, &binds.ranges, particles.div_ceil(256))
-                }
-                StepPass::MarkBlocks => {
-                    self.mark_blocks
-                        .record(&mut c, &binds.mark_blocks, particles)
-                }
-                StepPass::CompactBlocks => {
-                    self.compact_blocks
-                        .record(&mut c, &binds.compact_blocks, blocks)
-                }
-                StepPass::Gather => self.gather.record(&mut c, &binds.gather, b),
-                StepPass::G2p => self.g2p.record(&mut c, &binds.g2p, particles),
-            }
-        }
+    ) -> Vec<Stage<'a>> {
+        passes
+            .iter()
+            .filter(|p| **p != StepPass::Clear)
+            .map(|&pass| {
+                Stage::new(pass.name(), move |c: &mut wgpu::ComputePass| match pass {
+                    StepPass::Clear => {}
+                    StepPass::Prepare => self.prepare.record(c, &binds.prepare, particles),
+                    StepPass::MarkParticles => {
+                        let (a, ab) = self.atomic_passes(binds);
+                        a.mark.record(c, &ab.mark, particles);
+                    }
+                    StepPass::Scatter => {
+                        let (a, ab) = self.atomic_passes(binds);
+                        a.scatter.record(c, &ab.scatter, particles);
+                    }
+                    StepPass::GridFromSums => {
+                        let (a, ab) = self.atomic_passes(binds);
+                        a.grid.record(c, &ab.grid, b);
+                    }
+                    StepPass::Sort => self.sort.record(c, &self.scan, &binds.sort),
+                    StepPass::Ranges => {
+                        self.ranges
+                            .kernel
+                            .dispatch(c, &binds.ranges, particles.div_ceil(256))
+                    }
+                    StepPass::MarkBlocks => {
+                        self.mark_blocks.record(c, &binds.mark_blocks, particles)
+                    }
+                    StepPass::CompactBlocks => {
+                        self.compact_blocks.record(c, &binds.compact_blocks, blocks)
+                    }
+                    StepPass::Gather => self.gather.record(c, &binds.gather, b),
+                    StepPass::G2p => self.g2p.record(c, &binds.g2p, particles),
+                })
+            })
+            .collect()
     }
 
     fn atomic_passes<'a>(&'a self, binds: &'a Binds) -> (&'a AtomicPasses, &'a AtomicBinds) {
