@@ -6,7 +6,6 @@
 
 use glam::{DMat3, DVec3};
 
-use super::models::ElasticDef;
 use super::svd::{polar, svd3};
 
 /// Lamé parameters μ (`mu`, shear modulus) and λ (`lambda`).
@@ -77,25 +76,6 @@ pub fn energy_neo_hookean(f: DMat3, lame: &Lame) -> f64 {
     0.5 * lame.mu * (j.powf(-2.0 / 3.0) * tr_b - 3.0)
         + 0.5 * lame.kappa() * (0.5 * (j * j - 1.0) - j.ln())
 }
-
-/// Fixed corotated, registered in [`super::models`]; WGSL in `shaders/sim/elasticity.wgsl`.
-pub const FIXED_COROTATED: ElasticDef = ElasticDef {
-    name: "fixed_corotated",
-    kirchhoff: kirchhoff_fixed_corotated,
-    energy: energy_fixed_corotated,
-    wgsl_kirchhoff: "elastic_kirchhoff_fixed_corotated(f, m.mu, m.lambda)",
-    wgsl_module: "",
-};
-
-/// Neo-Hookean (Borden), registered in [`super::models`]; WGSL in
-/// `shaders/sim/elasticity.wgsl`. Also the elasticity under NACC.
-pub const NEO_HOOKEAN: ElasticDef = ElasticDef {
-    name: "neo_hookean",
-    kirchhoff: kirchhoff_neo_hookean,
-    energy: energy_neo_hookean,
-    wgsl_kirchhoff: "elastic_kirchhoff_neo_hookean(f, m.mu, m.kappa)",
-    wgsl_module: "",
-};
 
 #[cfg(test)]
 mod tests {

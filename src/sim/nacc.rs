@@ -26,7 +26,6 @@
 use glam::{DMat3, DVec3};
 
 use super::elasticity::Lame;
-use super::models::PlasticDef;
 use super::svd::svd3;
 
 /// The floor ε₀ of the cohesion p0 = κ (ε₀ + sinh(…)) (docs/method.md §4, as in the reference code).
@@ -388,13 +387,6 @@ pub struct PlasticReturn {
     pub p: f64,
     pub q: f64,
 }
-
-/// NACC, registered in [`super::models`]: `nacc_return_map` of `shaders/sim/nacc.wgsl`.
-pub const NACC_PLASTICITY: PlasticDef = PlasticDef {
-    name: "nacc",
-    wgsl_body: "let r = nacc_return_map(f, alpha, m.nacc); return PlasticState(r.f, r.alpha);",
-    wgsl_module: "",
-};
 
 /// NACC return mapping of a trial elastic gradient (docs/method.md §4), with p0 from the α at the
 /// start of the step and hardening α ← α + ln(J_tr / J_new) when y_tr > 0.
