@@ -171,6 +171,61 @@ fn surface_only_ply_sphere_fills_without_holes() {
     assert!(worst <= 2.0 * h, "a hole: {} spacings", worst / h);
 }
 
+/// A sphere with three caps missing, facing +x, +y and +z (a capture with openings seen
+/// along every axis): where the rays of all three axes pass an opening, parity has no vote
+/// it can trust and leaves the voxel empty, with a warning that names the closing mode;
+/// the closing mode bridges the opening and fills the volume, and nothing outside the
+/// sphere.
+#[test]
+fn open_capture_fills_with_the_closing_mode() {
+    let (r, h) = (0.3f64, 0.01f64);
+    let centre = Vec3::splat(0.5);
+    let mut cloud = surface_sphere(centre, r as f32, 20_000);
+    // Cut away the caps beyond 0.8 r: openings of radius 0.6 r.
+    let keep: Vec<usize> = (0..cloud.len())
+        .filter(|&i| (cloud.positions[i] - centre).max_element() < 0.8 * r as f32)
+        .collect();
+    cloud.positions = keep.iter().map(|&i| cloud.positions[i]).collect();
+    cloud.scales = keep.iter().map(|&i| cloud.scales[i]).collect();
+    cloud.rotations = keep.iter().map(|&i| cloud.rotations[i]).collect();
+    cloud.opacities = keep.iter().map(|&i| cloud.opacities[i]).collect();
+    let covariances: Vec<_> = (0..cloud.len())
+        .map(|i| splatter::render::splats::sym3_from_mat3(cloud.covariance(i)))
+        .collect();
+    let everywhere = |_: DVec3| true;
+    let run = |inside| {
+        fill(&FillInput {
+            means: &cloud.positions,
+            covariances: &covariances,
+            opacities: &cloud.opacities,
+            spacing: h,
+            inside,
+            region: &everywhere,
+        })
+        .unwrap()
+    };
+    let volume = 4.0 / 3.0 * std::f64::consts::PI * r.powi(3) / h.powi(3);
+    let parity = run(InsideTest::Parity);
+    // Each opening is 2·0.6·r = 0.36 wide: a closing radius of 0.2 bridges it.
+    let closing = run(InsideTest::Closing { radius: 20 });
+    println!(
+        "open sphere: parity {} fill points, closing {} (volume/h³ = {volume:.0}); parity warnings {:?}",
+        parity.points.len(),
+        closing.points.len(),
+        parity.warnings
+    );
+    assert!(
+        parity.warnings.iter().any(|w| w.contains("\"closing\"")),
+        "{:?}",
+        parity.warnings
+    );
+    assert!((closing.points.len() as f64) > 0.75 * volume);
+    assert!((closing.points.len() as f64) < volume);
+    assert!(closing.points.len() > parity.points.len() + (0.15 * volume) as usize);
+    let c = centre.as_dvec3();
+    assert!(closing.points.iter().all(|p| p.distance(c) < r + 2.0 * h));
+}
+
 /// An open surface (a hemisphere) and degenerate covariances: no panic, a warning naming
 /// what was odd, bounded counts.
 #[test]

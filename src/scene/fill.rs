@@ -38,6 +38,8 @@ pub const MAX_FILL_VOXELS: usize = 1 << 25;
 pub const MAX_FILL_PARTICLES: usize = 8 << 20;
 /// A Gaussian marks voxels at most this many voxels away from its mean's, per axis.
 pub const MAX_REACH_VOXELS: i64 = 4;
+/// Largest closing radius, in voxels (the closing's work grows with it).
+pub const MAX_CLOSING_VOXELS: usize = 16;
 /// The density a voxel centre needs from one Gaussian to be on the surface.
 pub const BAND_ALPHA: f64 = 0.1;
 /// Above this share of odd rays (among the rays that meet the surface) a warning says the
@@ -49,8 +51,12 @@ const BAND: u8 = 2;
 
 /// How solid voxels are found.
 pub enum InsideTest<'a> {
-    /// Ray-crossing parity of the Gaussians' density along x, y and z (PLY objects).
+    /// Ray-crossing parity of the Gaussians' density along x, y and z (captures whose
+    /// surface is closed).
     Parity,
+    /// Morphological closing of the density's band by `radius` voxels (open captures:
+    /// leaves, a pot's mouth, a missing underside).
+    Closing { radius: usize },
     /// An exact inside test in world coordinates and the solid's world bounding box
     /// (procedural objects).
     Exact {
@@ -180,94 +186,16 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
         point_volume: h.powi(3),
         ..Default::default()
     };
-    let (lo, hi) = match &input.inside {
-        InsideTest::Parity => {
-            let (lo, hi) = input
-                .means
-                .iter()
-                .filter(|m| m.is_finite())
-                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), m| {
-                    (lo.min(m.as_dvec3()), hi.max(m.as_dvec3()))
-                });
-            (lo - 2.0 * h, hi + 2.0 * h)
-        }
-        InsideTest::Exact { lo, hi, .. } => (*lo - h, *hi + h),
-    };
-    if !(lo.is_finite() && hi.is_finite()) {
+    let Some(grid) = voxel_grid(input)? else {
         out.warnings
             .push("fill: no Gaussian with a finite position; nothing filled".into());
         out.stats = stats;
         return Ok(out);
-    }
-    let dims = ((hi - lo) / h).ceil().max(DVec3::ONE);
-    let count = dims.element_product();
-    if count.is_nan() || count > MAX_FILL_VOXELS as f64 {
-        return Err(FillError::TooManyVoxels {
-            count,
-            nx: dims.x,
-            ny: dims.y,
-            nz: dims.z,
-            spacing: h,
-            max: MAX_FILL_VOXELS,
-        });
-    }
-    let grid = Voxels {
-        lo,
-        h,
-        n: [dims.x as usize, dims.y as usize, dims.z as usize],
     };
     stats.dims = grid.n;
     let flags: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
-
-    // The voxel of each mean (u32::MAX: none), and the MEAN flags.
-    let home: Vec<u32> = input
-        .means
-        .par_iter()
-        .map(|m| {
-            if !m.is_finite() {
-                return u32::MAX;
-            }
-            match grid.inside(grid.cell(m.as_dvec3())) {
-                Some(c) => {
-                    let idx = grid.index(c);
-                    flags[idx].fetch_or(MEAN, Relaxed);
-                    idx as u32
-                }
-                None => u32::MAX,
-            }
-        })
-        .collect();
-
-    let solid: Vec<bool> = match &input.inside {
-        InsideTest::Exact { contains, .. } => (0..grid.len())
-            .into_par_iter()
-            .map(|idx| contains(grid.centre(grid.coords(idx))))
-            .collect(),
-        InsideTest::Parity => {
-            let (degenerate, clipped) = mark_band(input, &grid, &flags);
-            stats.degenerate = degenerate;
-            stats.clipped = clipped;
-            stats.band_voxels = flags
-                .par_iter()
-                .filter(|f| f.load(Relaxed) & BAND != 0)
-                .count();
-            let votes: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
-            for axis in 0..3 {
-                let (hit, odd) = vote_axis(&grid, &flags, &votes, axis);
-                stats.rays_hit += hit;
-                stats.odd_rays += odd;
-            }
-            votes
-                .par_iter()
-                .zip(flags.par_iter())
-                .map(|(v, f)| {
-                    let v = v.load(Relaxed);
-                    let (inside, conclusive) = (v & 15, v >> 4);
-                    f.load(Relaxed) & BAND == 0 && 2 * inside > conclusive
-                })
-                .collect()
-        }
-    };
+    let home = mark_means(input, &grid, &flags);
+    let solid = solid_voxels(input, &grid, &flags, &mut stats);
     stats.solid_voxels = solid.iter().filter(|s| **s).count();
 
     // Fill voxels: solid, no Gaussian there, inside the selection.
@@ -291,7 +219,214 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
         .map(|&idx| grid.centre(grid.coords(idx)))
         .collect();
 
-    // Volumes: each voxel holding means shares h³ among them.
+    let by_voxel = share_volumes(&home, h, &mut out.volumes);
+    // Appearance donors: flooded out from the voxels that hold Gaussians.
+    if by_voxel.is_empty() {
+        out.points.clear();
+    } else {
+        let donor = flood_donors(&grid, &by_voxel);
+        out.nearest = fill_idx.iter().map(|&idx| donor[idx]).collect();
+    }
+    out.warnings = warnings(input, &stats);
+    out.stats = stats;
+    Ok(out)
+}
+
+/// The voxel grid over what is to be filled, with a margin, or None when no Gaussian has a
+/// finite position. The closing mode needs its radius of margin more, so that dilation
+/// never meets the grid's edge.
+fn voxel_grid(input: &FillInput) -> Result<Option<Voxels>, FillError> {
+    let h = input.spacing;
+    let (lo, hi) = match &input.inside {
+        InsideTest::Parity | InsideTest::Closing { .. } => {
+            let (lo, hi) = input
+                .means
+                .iter()
+                .filter(|m| m.is_finite())
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), m| {
+                    (lo.min(m.as_dvec3()), hi.max(m.as_dvec3()))
+                });
+            let margin = match input.inside {
+                InsideTest::Closing { radius } => 2 + radius,
+                _ => 2,
+            };
+            (lo - margin as f64 * h, hi + margin as f64 * h)
+        }
+        InsideTest::Exact { lo, hi, .. } => (*lo - h, *hi + h),
+    };
+    if !(lo.is_finite() && hi.is_finite()) {
+        return Ok(None);
+    }
+    let dims = ((hi - lo) / h).ceil().max(DVec3::ONE);
+    let count = dims.element_product();
+    if count.is_nan() || count > MAX_FILL_VOXELS as f64 {
+        return Err(FillError::TooManyVoxels {
+            count,
+            nx: dims.x,
+            ny: dims.y,
+            nz: dims.z,
+            spacing: h,
+            max: MAX_FILL_VOXELS,
+        });
+    }
+    Ok(Some(Voxels {
+        lo,
+        h,
+        n: [dims.x as usize, dims.y as usize, dims.z as usize],
+    }))
+}
+
+/// The voxel of each mean (u32::MAX: none), setting the MEAN flags.
+fn mark_means(input: &FillInput, grid: &Voxels, flags: &[AtomicU8]) -> Vec<u32> {
+    input
+        .means
+        .par_iter()
+        .map(|m| {
+            if !m.is_finite() {
+                return u32::MAX;
+            }
+            match grid.inside(grid.cell(m.as_dvec3())) {
+                Some(c) => {
+                    let idx = grid.index(c);
+                    flags[idx].fetch_or(MEAN, Relaxed);
+                    idx as u32
+                }
+                None => u32::MAX,
+            }
+        })
+        .collect()
+}
+
+/// Which voxels are inside the object, by the input's inside test.
+fn solid_voxels(
+    input: &FillInput,
+    grid: &Voxels,
+    flags: &[AtomicU8],
+    stats: &mut FillStats,
+) -> Vec<bool> {
+    if let InsideTest::Exact { contains, .. } = &input.inside {
+        return (0..grid.len())
+            .into_par_iter()
+            .map(|idx| contains(grid.centre(grid.coords(idx))))
+            .collect();
+    }
+    let (degenerate, clipped) = mark_band(input, grid, flags);
+    stats.degenerate = degenerate;
+    stats.clipped = clipped;
+    let band: Vec<bool> = flags
+        .par_iter()
+        .map(|f| f.load(Relaxed) & BAND != 0)
+        .collect();
+    stats.band_voxels = band.iter().filter(|b| **b).count();
+    match input.inside {
+        InsideTest::Closing { radius } => closed_interior(grid, &band, radius),
+        _ => parity_interior(grid, flags, &band, stats),
+    }
+}
+
+/// Ray-crossing parity voted over the three axes: a voxel off the band is inside when more
+/// rays through it say inside than outside.
+fn parity_interior(
+    grid: &Voxels,
+    flags: &[AtomicU8],
+    band: &[bool],
+    stats: &mut FillStats,
+) -> Vec<bool> {
+    let votes: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
+    for axis in 0..3 {
+        let (hit, odd) = vote_axis(grid, flags, &votes, axis);
+        stats.rays_hit += hit;
+        stats.odd_rays += odd;
+    }
+    votes
+        .par_iter()
+        .zip(band.par_iter())
+        .map(|(v, &on_band)| {
+            let v = v.load(Relaxed);
+            let (inside, conclusive) = (v & 15, v >> 4);
+            !on_band && 2 * inside > conclusive
+        })
+        .collect()
+}
+
+/// Morphological closing of the band: dilate it by `radius` voxels (a cube), flood the
+/// outside from the grid's faces through what is not dilated, take everything the flood
+/// did not reach, and erode that by `radius` again. Openings narrower than about
+/// 2·radius voxels (a pot's mouth, a missing underside, gaps between leaves) are bridged
+/// by the dilation, so the flood cannot get in; the erosion puts the outer surface back
+/// where the band was. Band voxels themselves hold the surface's Gaussians and are not
+/// filled.
+fn closed_interior(grid: &Voxels, band: &[bool], radius: usize) -> Vec<bool> {
+    let dilated = box_filter(grid, band, radius, true);
+    let outside = flood_outside(grid, &dilated);
+    let closed: Vec<bool> = outside.par_iter().map(|o| !o).collect();
+    let eroded = box_filter(grid, &closed, radius, false);
+    eroded
+        .par_iter()
+        .zip(band.par_iter())
+        .map(|(&e, &b)| e && !b)
+        .collect()
+}
+
+/// Separable cube dilation (`any`) or erosion (not `any`: all) of `set` by `radius`
+/// voxels along each axis. Outside the grid counts as empty for dilation and as full
+/// for erosion (the grid's margin is empty anyway).
+fn box_filter(grid: &Voxels, set: &[bool], radius: usize, any: bool) -> Vec<bool> {
+    let mut cur = set.to_vec();
+    let r = radius as i64;
+    for axis in 0..3 {
+        let prev = cur;
+        cur = (0..grid.len())
+            .into_par_iter()
+            .map(|idx| {
+                let c = grid.coords(idx);
+                let mut n = c.map(|v| v as i64);
+                let around = (-r..=r).filter_map(|d| {
+                    n[axis] = c[axis] as i64 + d;
+                    grid.inside(n).map(|m| prev[grid.index(m)])
+                });
+                if any {
+                    around.into_iter().any(|v| v)
+                } else {
+                    around.into_iter().all(|v| v)
+                }
+            })
+            .collect();
+    }
+    cur
+}
+
+/// Voxels reachable (6-neighbour steps) from the grid's faces without entering `wall`.
+fn flood_outside(grid: &Voxels, wall: &[bool]) -> Vec<bool> {
+    let mut outside = vec![false; grid.len()];
+    let mut queue = VecDeque::new();
+    for idx in 0..grid.len() {
+        let c = grid.coords(idx);
+        let on_face = (0..3).any(|a| c[a] == 0 || c[a] + 1 == grid.n[a]);
+        if on_face && !wall[idx] {
+            outside[idx] = true;
+            queue.push_back(idx);
+        }
+    }
+    while let Some(idx) = queue.pop_front() {
+        let c = grid.coords(idx);
+        for (axis, step) in [(0, -1), (0, 1), (1, -1), (1, 1), (2, -1), (2, 1)] {
+            let mut n = c.map(|v| v as i64);
+            n[axis] += step;
+            let Some(n) = grid.inside(n) else { continue };
+            let nidx = grid.index(n);
+            if !outside[nidx] && !wall[nidx] {
+                outside[nidx] = true;
+                queue.push_back(nidx);
+            }
+        }
+    }
+    outside
+}
+
+/// Each voxel holding means shares h³ among them. Returns the (voxel, Gaussian) pairs,
+/// sorted.
+fn share_volumes(home: &[u32], h: f64, volumes: &mut [f64]) -> Vec<(u32, u32)> {
     let mut by_voxel: Vec<(u32, u32)> = home
         .iter()
         .enumerate()
@@ -302,19 +437,16 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
     for run in by_voxel.chunk_by(|a, b| a.0 == b.0) {
         let share = h.powi(3) / run.len() as f64;
         for &(_, i) in run {
-            out.volumes[i as usize] = share;
+            volumes[i as usize] = share;
         }
     }
+    by_voxel
+}
 
-    // Appearance donors: flooded out from the voxels that hold Gaussians.
-    if by_voxel.is_empty() {
-        out.points.clear();
-    } else {
-        let donor = flood_donors(&grid, &by_voxel);
-        out.nearest = fill_idx.iter().map(|&idx| donor[idx]).collect();
-    }
-
-    let w = &mut out.warnings;
+/// What the user should hear about the input and the result.
+fn warnings(input: &FillInput, stats: &FillStats) -> Vec<String> {
+    let h = input.spacing;
+    let mut w = Vec::new();
     if stats.nonfinite_means > 0 {
         w.push(format!(
             "fill: {} Gaussians with a non-finite position ignored",
@@ -338,7 +470,7 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
         let share = stats.odd_rays as f64 / stats.rays_hit.max(1) as f64;
         if share > OPEN_RAY_SHARE {
             w.push(format!(
-                "fill: {:.0}% of the rays that meet the surface cross it an odd number of times: the surface looks open (or has holes wider than the spacing {h:.3e}); only voxels that rays agree on are filled",
+                "fill: {:.0}% of the rays that meet the surface cross it an odd number of times: the surface looks open (or has holes wider than the spacing {h:.3e}); only voxels that rays agree on are filled. For an open capture use {{\"mode\": \"closing\"}} (see docs/physics.md, interior filling)",
                 100.0 * share
             ));
         }
@@ -348,8 +480,7 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
             "fill: no interior found at spacing {h:.3e} (no closed surface, or the object is thinner than two spacings); nothing added"
         ));
     }
-    out.stats = stats;
-    Ok(out)
+    w
 }
 
 /// Mark the voxels each Gaussian's density reaches (BAND). Returns (degenerate, clipped).

@@ -334,9 +334,9 @@ fn read_cameras_json(path: &Path) -> Result<Vec<(CameraEntry, Mat3)>, SceneError
                 ));
             }
         }
-        super::check_positive(&origin, &f("fx"), e.fx)?;
-        super::check_positive(&origin, &f("fy"), e.fy)?;
-        super::check_finite3(&origin, &f("position"), e.position)?;
+        super::validate::check_positive(&origin, &f("fx"), e.fx)?;
+        super::validate::check_positive(&origin, &f("fy"), e.fy)?;
+        super::validate::check_finite3(&origin, &f("position"), e.position)?;
         let r = mat3_from_rows(e.rotation);
         if let Some(problem) = rotation_problem(r, 1e-3) {
             return Err(SceneError::invalid(

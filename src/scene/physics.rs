@@ -196,6 +196,24 @@ pub struct FillOptions {
     /// Particle spacing h of the fill, in [Δx/16, Δx]. Default Δx/2.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spacing: Option<f64>,
+    /// How a capture's inside is found: `parity` (ray crossings; closed surfaces) or
+    /// `closing` (the surface closed morphologically; open captures). Procedural objects
+    /// use their exact inside test whatever this says. Default `parity`.
+    #[serde(default)]
+    pub mode: FillMode,
+    /// `closing` only: the widest opening to bridge is about twice this (scene units).
+    /// Default 3 fill spacings.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closing_radius: Option<f64>,
+}
+
+/// `physics.fill.mode`.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FillMode {
+    #[default]
+    Parity,
+    Closing,
 }
 
 impl<'de> Deserialize<'de> for FillSpec {
@@ -220,6 +238,14 @@ impl FillSpec {
             FillSpec::Enabled(false) => None,
             FillSpec::Enabled(true) => Some(0.5 * dx),
             FillSpec::Options(o) => Some(o.spacing.unwrap_or(0.5 * dx)),
+        }
+    }
+
+    /// The inside test's mode and, for `closing`, its radius in scene units (for spacing h).
+    pub(super) fn mode(&self, h: f64) -> (FillMode, f64) {
+        match self {
+            FillSpec::Options(o) => (o.mode, o.closing_radius.unwrap_or(3.0 * h)),
+            FillSpec::Enabled(_) => (FillMode::Parity, 3.0 * h),
         }
     }
 }

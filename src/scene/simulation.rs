@@ -647,7 +647,8 @@ fn fill_object(
     h: f64,
     dx: f64,
 ) -> Result<super::fill::Fill, SceneError> {
-    use super::fill::{fill, FillInput, InsideTest};
+    use super::fill::{fill, FillInput, InsideTest, MAX_CLOSING_VOXELS};
+    use super::physics::FillMode;
     let o = scene.origin.as_str();
     let field = format!("objects[{i}].physics.fill.spacing");
     if !(h.is_finite() && h >= dx / 16.0 && h <= dx) {
@@ -670,7 +671,26 @@ fn fill_object(
             .is_some_and(|s| s.contains((m_inv * (p - t)).to_array()))
     };
     let inside = match &obj.procedural {
-        None => InsideTest::Parity,
+        None => match physics.fill.as_ref().map(|f| f.mode(h)) {
+            Some((FillMode::Closing, r)) => {
+                let radius = (r / h).round();
+                if !(r.is_finite() && r > 0.0 && radius <= MAX_CLOSING_VOXELS as f64) {
+                    return Err(SceneError::invalid(
+                        o,
+                        format!("objects[{i}].physics.fill.closing_radius"),
+                        r,
+                        format!(
+                            "a radius > 0 of at most {MAX_CLOSING_VOXELS} fill spacings ({})",
+                            MAX_CLOSING_VOXELS as f64 * h
+                        ),
+                    ));
+                }
+                InsideTest::Closing {
+                    radius: (radius as usize).max(1),
+                }
+            }
+            _ => InsideTest::Parity,
+        },
         Some(spec) => {
             let (blo, bhi) = spec.bounds();
             let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);

@@ -1,350 +1,14 @@
-//! Procedural assets: recognisable objects (fruit, food, furniture, props) for the paper's
-//! scenes, as implicit solids with named regions.
-//!
-//! Each asset is one function of a point (object coordinates, z up, the asset centred on
-//! the origin inside the box ±`size`/2) that answers `None` outside the solid and otherwise
-//! the region's label id and colour there. That one function is the exact inside test
-//! (interior filling), the colour of lattice and fill Gaussians, and the region labels, so
-//! the three always agree. Every solid is clipped to its box, so `bounds` is exact too.
-//! Patterns (stripes, seeds, pores, grain) come from a fixed hash of position, so an asset
-//! looks the same whatever its lattice `spacing` or `seed`.
+//! The assets, one function each of a point in object coordinates. `h` is the half extent
+//! of the bounding box; colours are display RGB.
 
 use glam::DVec3;
 
-/// Display colour in [0, 1] (what the PNG shows for an unlit Gaussian).
-pub type Rgb = [f32; 3];
-
-/// The assets, as named by `"shape"` in a scene's `procedural` block.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    Watermelon,
-    Jelly,
-    Pumpkin,
-    Kiwi,
-    Pineapple,
-    Dragonfruit,
-    Toast,
-    Sandcastle,
-    Pillow,
-    Cloth,
-    Table,
-    Knife,
-    Projectile,
-}
-
-impl Kind {
-    /// Every asset, in documentation order.
-    pub const ALL: [Kind; 13] = [
-        Kind::Watermelon,
-        Kind::Jelly,
-        Kind::Pumpkin,
-        Kind::Kiwi,
-        Kind::Pineapple,
-        Kind::Dragonfruit,
-        Kind::Toast,
-        Kind::Sandcastle,
-        Kind::Pillow,
-        Kind::Cloth,
-        Kind::Table,
-        Kind::Knife,
-        Kind::Projectile,
-    ];
-
-    /// The `"shape"` name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Kind::Watermelon => "watermelon",
-            Kind::Jelly => "jelly",
-            Kind::Pumpkin => "pumpkin",
-            Kind::Kiwi => "kiwi",
-            Kind::Pineapple => "pineapple",
-            Kind::Dragonfruit => "dragonfruit",
-            Kind::Toast => "toast",
-            Kind::Sandcastle => "sandcastle",
-            Kind::Pillow => "pillow",
-            Kind::Cloth => "cloth",
-            Kind::Table => "table",
-            Kind::Knife => "knife",
-            Kind::Projectile => "projectile",
-        }
-    }
-
-    /// Full extent [x, y, z] in scene units when the scene gives no `size` (the scale of
-    /// the example scenes, whose simulation domains are about a metre wide).
-    pub fn default_size(self) -> [f32; 3] {
-        match self {
-            Kind::Watermelon => [0.30, 0.22, 0.22],
-            Kind::Jelly => [0.18, 0.18, 0.18],
-            Kind::Pumpkin => [0.30, 0.30, 0.24],
-            Kind::Kiwi => [0.12, 0.09, 0.09],
-            Kind::Pineapple => [0.16, 0.16, 0.36],
-            Kind::Dragonfruit => [0.13, 0.13, 0.17],
-            Kind::Toast => [0.12, 0.11, 0.02],
-            Kind::Sandcastle => [0.40, 0.40, 0.30],
-            Kind::Pillow => [0.50, 0.34, 0.14],
-            Kind::Cloth => [0.60, 0.60, 0.01],
-            Kind::Table => [0.80, 0.50, 0.40],
-            Kind::Knife => [0.30, 0.03, 0.05],
-            Kind::Projectile => [0.06, 0.06, 0.06],
-        }
-    }
-
-    /// Region names; label ids index this. Id 0 is the region a scene's `color` repaints.
-    pub fn regions(self) -> &'static [&'static str] {
-        match self {
-            Kind::Watermelon => &["rind", "white_rind", "flesh", "seeds"],
-            Kind::Jelly => &["jelly"],
-            Kind::Pumpkin => &["skin", "flesh", "seeds", "stem"],
-            Kind::Kiwi => &["skin", "flesh", "core", "seeds"],
-            Kind::Pineapple => &["skin", "flesh", "core", "crown"],
-            Kind::Dragonfruit => &["skin", "bracts", "flesh", "seeds"],
-            Kind::Toast => &["crust", "crumb"],
-            Kind::Sandcastle => &["sand"],
-            Kind::Pillow => &["fabric", "stuffing", "seam"],
-            Kind::Cloth => &["cloth"],
-            Kind::Table => &["top", "legs"],
-            Kind::Knife => &["blade", "handle"],
-            Kind::Projectile => &["ball"],
-        }
-    }
-
-    /// An upper bound on the fraction of the bounding box the solid fills (measured on
-    /// the default shapes, with a margin for coarse lattices), for `estimated_count`.
-    pub fn fill_fraction(self) -> f64 {
-        match self {
-            Kind::Jelly | Kind::Cloth => 1.0,
-            Kind::Toast => 0.95,
-            Kind::Pillow => 0.9,
-            Kind::Watermelon | Kind::Kiwi | Kind::Projectile => 0.62,
-            Kind::Sandcastle => 0.52,
-            Kind::Pumpkin => 0.42,
-            Kind::Pineapple => 0.4,
-            Kind::Knife => 0.25,
-            Kind::Dragonfruit => 0.3,
-            Kind::Table => 0.12,
-        }
-    }
-}
-
-/// An asset of a given size.
-#[derive(Clone, Copy, Debug)]
-pub struct Asset {
-    pub kind: Kind,
-    /// Half extents of the bounding box.
-    pub half: DVec3,
-}
-
-impl Asset {
-    pub fn new(kind: Kind, size: [f32; 3]) -> Asset {
-        Asset {
-            kind,
-            half: DVec3::new(size[0].into(), size[1].into(), size[2].into()) * 0.5,
-        }
-    }
-
-    /// Label id and colour of the region at `p` (object coordinates), `None` outside.
-    pub fn sample(&self, p: [f64; 3]) -> Option<(u16, Rgb)> {
-        let p = DVec3::from_array(p);
-        if !(p.abs().cmple(self.half).all()) {
-            return None;
-        }
-        let h = self.half;
-        match self.kind {
-            Kind::Watermelon => watermelon(p, h),
-            Kind::Jelly => jelly(p, h),
-            Kind::Pumpkin => pumpkin(p, h),
-            Kind::Kiwi => kiwi(p, h),
-            Kind::Pineapple => pineapple(p, h),
-            Kind::Dragonfruit => dragonfruit(p, h),
-            Kind::Toast => toast(p, h),
-            Kind::Sandcastle => sandcastle(p, h),
-            Kind::Pillow => pillow(p, h),
-            Kind::Cloth => cloth(p, h),
-            Kind::Table => table(p, h),
-            Kind::Knife => knife(p, h),
-            Kind::Projectile => projectile(p, h),
-        }
-    }
-
-    /// Whether `p` is in the solid.
-    pub fn contains(&self, p: [f64; 3]) -> bool {
-        self.sample(p).is_some()
-    }
-
-    /// Approximate depth below the surface of a point inside: the shortest escape along 26
-    /// directions (axes, face and space diagonals), marched in steps of 1/16 of the
-    /// smallest half extent (thinner gaps may be stepped over) and refined by bisection to
-    /// 1/16 000 of it. 0 outside. Hundreds of ray marches a point: for shell regions at
-    /// setup, not per frame.
-    pub fn depth(&self, p: [f64; 3]) -> f64 {
-        let p = DVec3::from_array(p);
-        if !self.contains(p.to_array()) {
-            return 0.0;
-        }
-        let step = self.half.min_element() / 16.0;
-        let reach = 2.0 * self.half.max_element();
-        let mut best = reach;
-        for d in directions() {
-            // Sample up to the best escape so far (the last step is cut short at it).
-            let mut t = 0.0;
-            while t < best {
-                let next = (t + step).min(best);
-                if !self.contains((p + d * next).to_array()) {
-                    // Bisect between the last inside point and this outside one.
-                    let (mut lo, mut hi) = (t, next);
-                    for _ in 0..10 {
-                        let mid = 0.5 * (lo + hi);
-                        if self.contains((p + d * mid).to_array()) {
-                            lo = mid;
-                        } else {
-                            hi = mid;
-                        }
-                    }
-                    best = hi;
-                    break;
-                }
-                t = next;
-            }
-        }
-        best
-    }
-}
-
-/// The 26 unit directions to the neighbours of a cube cell.
-fn directions() -> impl Iterator<Item = DVec3> {
-    (0..27).filter(|&i| i != 13).map(|i| {
-        DVec3::new(
-            (i % 3) as f64 - 1.0,
-            ((i / 3) % 3) as f64 - 1.0,
-            (i / 9) as f64 - 1.0,
-        )
-        .normalize()
-    })
-}
-
-// ---------------------------------------------------------------------------------------
-// Helpers: hashing, noise, colour mixing.
-
-/// A hash of integer lattice coordinates and a salt, uniform in [0, 1).
-fn hash(i: [i64; 3], salt: u64) -> f64 {
-    let mut x = salt.wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    for c in i {
-        x ^= (c as u64).wrapping_add(0x632B_E59B_D9B4_E019);
-        x = x.wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        x ^= x >> 31;
-    }
-    x = x.wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^= x >> 29;
-    (x >> 11) as f64 / (1u64 << 53) as f64
-}
-
-/// Three hashes of a cell (a point in the unit cube).
-fn hash3(i: [i64; 3], salt: u64) -> DVec3 {
-    DVec3::new(hash(i, salt), hash(i, salt + 1), hash(i, salt + 2))
-}
-
-fn cell(p: DVec3, c: f64) -> [i64; 3] {
-    let q = (p / c).floor();
-    [q.x as i64, q.y as i64, q.z as i64]
-}
-
-/// Smooth value noise in [0, 1] with features of size `c`.
-fn noise(p: DVec3, c: f64, salt: u64) -> f64 {
-    let q = p / c;
-    let b = q.floor();
-    let f = q - b;
-    let s = f * f * (DVec3::splat(3.0) - 2.0 * f);
-    let mut acc = 0.0;
-    for k in 0..8 {
-        let o = [(k & 1) as i64, ((k >> 1) & 1) as i64, ((k >> 2) & 1) as i64];
-        let w = (if o[0] == 1 { s.x } else { 1.0 - s.x })
-            * (if o[1] == 1 { s.y } else { 1.0 - s.y })
-            * (if o[2] == 1 { s.z } else { 1.0 - s.z });
-        acc += w * hash(
-            [b.x as i64 + o[0], b.y as i64 + o[1], b.z as i64 + o[2]],
-            salt,
-        );
-    }
-    acc
-}
-
-/// Per-point speckle in [−1, 1] on a fine grid `c` (grain of sand, fuzz of a skin).
-fn speckle(p: DVec3, c: f64, salt: u64) -> f64 {
-    2.0 * hash(cell(p, c), salt) - 1.0
-}
-
-fn mix(a: Rgb, b: Rgb, t: f64) -> Rgb {
-    let t = t.clamp(0.0, 1.0) as f32;
-    [0, 1, 2].map(|i| a[i] + (b[i] - a[i]) * t)
-}
-
-fn shade(c: Rgb, f: f64) -> Rgb {
-    c.map(|v| (v * f as f32).clamp(0.0, 1.0))
-}
-
-fn smoothstep(a: f64, b: f64, x: f64) -> f64 {
-    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
-/// Seeds scattered on a hashed grid: each cell (side `c`) holds, with probability `keep`,
-/// one seed centred anywhere in it. Returns the first seed centre among the 27 cells
-/// around `p` for which `hit` holds (so seeds up to `c` in size are found whole, and any
-/// cut through the solid shows them, not only cuts between cell walls).
-fn scattered(p: DVec3, c: f64, keep: f64, salt: u64, hit: impl Fn(DVec3) -> bool) -> Option<DVec3> {
-    let i0 = cell(p, c);
-    for k in 0..27 {
-        let i = [
-            i0[0] + k % 3 - 1,
-            i0[1] + (k / 3) % 3 - 1,
-            i0[2] + k / 9 - 1,
-        ];
-        if hash(i, salt) >= keep {
-            continue;
-        }
-        let lo = DVec3::new(i[0] as f64, i[1] as f64, i[2] as f64) * c;
-        let s = lo + c * hash3(i, salt + 7);
-        if hit(s) {
-            return Some(s);
-        }
-    }
-    None
-}
-
-/// Whether `v` (relative to a seed's centre) lies in a teardrop of half length `l` and
-/// largest radius `w` along the unit `axis` (blunt end towards +axis).
-fn teardrop(v: DVec3, axis: DVec3, l: f64, w: f64) -> bool {
-    let u = v.dot(axis);
-    if u.abs() > l {
-        return false;
-    }
-    let rho = (v - u * axis).length();
-    let t = 0.5 * (u / l + 1.0);
-    rho <= w * (1.0 - (u / l).powi(2)).sqrt() * (0.45 + 0.55 * t)
-}
-
-/// Radial distance below an ellipsoid's surface of a point with normalised radius `r`
-/// (the point `p` = r · surface point).
-fn radial_depth(p: DVec3, r: f64, half: DVec3) -> f64 {
-    if r < 1e-9 {
-        half.min_element()
-    } else {
-        (1.0 - r) * p.length() / r
-    }
-}
-
-/// Signed distance to a box of half extents `b` with edges rounded by `rc`.
-fn rounded_box(p: DVec3, b: DVec3, rc: f64) -> f64 {
-    let q = p.abs() - (b - DVec3::splat(rc));
-    q.max(DVec3::ZERO).length() + q.max_element().min(0.0) - rc
-}
-
-// ---------------------------------------------------------------------------------------
-// The assets. `h` is the half extent of the bounding box; colours are display RGB.
+use super::patterns::*;
+use super::Rgb;
 
 /// Ellipsoid, long axis x: dark green rind with wavy meridian stripes, a pale inner rind,
 /// red flesh, black teardrop seeds in a band halfway to the centre.
-fn watermelon(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn watermelon(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let r = (p / h).length();
     if r > 1.0 {
         return None;
@@ -389,7 +53,7 @@ fn watermelon(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 }
 
 /// Rounded cube in one bright colour, a little deeper in tone inside.
-fn jelly(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn jelly(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let rc = 0.22 * h.min_element();
     let d = rounded_box(p, h, rc);
     if d > 0.0 {
@@ -401,7 +65,7 @@ fn jelly(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// The pumpkin's ribbed, dimpled body in normalised coordinates (`q` scaled by the body's
 /// half extents); `inset` shrinks it uniformly (0 = the surface).
-fn pumpkin_body(q: DVec3, inset: f64) -> bool {
+pub(super) fn pumpkin_body(q: DVec3, inset: f64) -> bool {
     let q = q / (1.0 - inset);
     let phi = q.y.atan2(q.x);
     let groove = (5.0 * phi).cos().abs().powi(6);
@@ -418,7 +82,7 @@ fn pumpkin_body(q: DVec3, inset: f64) -> bool {
 
 /// Oblate and ribbed by 10 lobes: orange skin darker in the grooves, pale flesh, a hollow
 /// cavity with flat seeds along its wall, a green-brown stem in the top dimple.
-fn pumpkin(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn pumpkin(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     // The body fills z ∈ [−hz, hz − 0.3 hz]; the stem rises above it to hz.
     let bh = 0.85 * h.z;
     let centre = DVec3::new(0.0, 0.0, -h.z + bh);
@@ -473,7 +137,7 @@ fn pumpkin(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// Ellipsoid, long axis x: fuzzy brown skin, green flesh with pale rays, a cream core and a
 /// ring of black seeds around it.
-fn kiwi(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn kiwi(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let q = p / h;
     let r = q.length();
     if r > 1.0 {
@@ -547,7 +211,7 @@ impl PineBody {
 
 /// A barrel with a diamond pattern of eyes, pale yellow flesh, a fibrous core and a crown
 /// of long green leaves.
-fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let crown_h = 0.36 * 2.0 * h.z;
     let bh = (2.0 * h.z - crown_h) / 2.0;
     let centre_z = -h.z + bh;
@@ -575,7 +239,7 @@ fn pineapple(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// The pineapple's crown: 14 straight, tapering, keeled leaves from the top of the body,
 /// steeper in the middle.
-fn crown_leaf(p: DVec3, h: DVec3, base_z: f64) -> Option<(u16, Rgb)> {
+pub(super) fn crown_leaf(p: DVec3, h: DVec3, base_z: f64) -> Option<(u16, Rgb)> {
     // Leaves rise from the base: nothing far below it (a keeled leaf dips ≤ 0.11 hx).
     if p.z < base_z - 0.2 * h.x {
         return None;
@@ -609,7 +273,7 @@ fn crown_leaf(p: DVec3, h: DVec3, base_z: f64) -> Option<(u16, Rgb)> {
 
 /// Ovoid magenta body with flame-like bracts (pink, green at the tips) in a spiral, white
 /// flesh with small black seeds.
-fn dragonfruit(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn dragonfruit(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let bh = DVec3::new(0.74 * h.x, 0.74 * h.y, 0.8 * h.z);
     let centre = DVec3::new(0.0, 0.0, -0.2 * h.z);
     let q = (p - centre) / bh;
@@ -631,7 +295,7 @@ fn dragonfruit(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// One of the dragonfruit's bracts: a flat tongue leaving the surface upwards and
 /// outwards, magenta at the base, green at the tip.
-fn bract(p: DVec3, h: DVec3, centre: DVec3, bh: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn bract(p: DVec3, h: DVec3, centre: DVec3, bh: DVec3) -> Option<(u16, Rgb)> {
     let n = 22;
     for i in 0..n {
         let f = (i as f64 + 0.5) / n as f64;
@@ -668,7 +332,7 @@ fn bract(p: DVec3, h: DVec3, centre: DVec3, bh: DVec3) -> Option<(u16, Rgb)> {
 
 /// Whether (a, b) (normalised in the slice's plane) is inside the bread slice outline,
 /// shrunk by `ia`, `ib`: a rounded rectangle below and a wider dome on top.
-fn slice_outline(a: f64, b: f64, ia: f64, ib: f64) -> bool {
+pub(super) fn slice_outline(a: f64, b: f64, ia: f64, ib: f64) -> bool {
     let rect = DVec3::new(a, b + 0.35, 0.0);
     let in_rect = rounded_box(rect, DVec3::new(0.86 - ia, 0.65 - ib, 1.0), 0.12) <= 0.0;
     let dome = (a / (1.0 - ia)).powi(2) + ((b - 0.3) / (0.7 - ib)).powi(2) <= 1.0;
@@ -677,7 +341,7 @@ fn slice_outline(a: f64, b: f64, ia: f64, ib: f64) -> bool {
 
 /// A slice of bread lying flat (thickness along z): brown crust around the outline, light
 /// crumb with pores on the faces and inside.
-fn toast(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn toast(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let (a, b) = (p.x / h.x, p.y / h.y);
     if !slice_outline(a, b, 0.0, 0.0) {
         return None;
@@ -706,7 +370,7 @@ fn toast(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// Whether `p` is in a crenellated cylinder tower (axis `at`, radius `r`, from z = `z0` to
 /// `z1`, 8 merlons around the top ring).
-fn tower(p: DVec3, at: [f64; 2], r: f64, z0: f64, z1: f64) -> bool {
+pub(super) fn tower(p: DVec3, at: [f64; 2], r: f64, z0: f64, z1: f64) -> bool {
     let (dx, dy) = (p.x - at[0], p.y - at[1]);
     let rho = (dx * dx + dy * dy).sqrt();
     if rho > r || p.z < z0 || p.z > z1 {
@@ -721,7 +385,7 @@ fn tower(p: DVec3, at: [f64; 2], r: f64, z0: f64, z1: f64) -> bool {
 
 /// A square base with four crenellated corner towers, crenellated walls between them and
 /// a taller central keep; sand-coloured with grain, darker (wetter) at the bottom.
-fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let height = 2.0 * h.z;
     let z = |f: f64| -h.z + f * height;
     let base_top = z(0.18);
@@ -758,7 +422,7 @@ fn sandcastle(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// A puffy cushion: thickness falls to a thin seam at the edge; fabric on the outside with
 /// a fine weave, white stuffing inside, darker piping along the seam.
-fn pillow(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn pillow(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let (a, b) = (p.x / h.x, p.y / h.y);
     let puff = ((1.0 - a.powi(4)).max(0.0) * (1.0 - b.powi(4)).max(0.0)).sqrt();
     let seam = 0.1;
@@ -778,7 +442,7 @@ fn pillow(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 }
 
 /// A thin sheet (the whole box) in red-and-white gingham.
-fn cloth(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn cloth(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let period = 0.2 * h.x.max(h.y);
     let sx = (p.x / period).rem_euclid(1.0) < 0.5;
     let sy = (p.y / period).rem_euclid(1.0) < 0.5;
@@ -792,7 +456,7 @@ fn cloth(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// A table: a top with rounded corners on four square legs; wood with grain along x on
 /// the top and along z on the legs.
-fn table(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn table(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let top_t = 0.1 * h.z;
     let wood = [0.62, 0.4, 0.22];
     if p.z >= h.z - 2.0 * top_t {
@@ -816,7 +480,7 @@ fn table(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 
 /// A kitchen knife along x: a dark handle with two rivets, a thin steel blade whose edge
 /// curves up to the tip at the spine.
-fn knife(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn knife(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let length = 2.0 * h.x;
     let blade_start = -h.x + 0.38 * length;
     if p.x < blade_start {
@@ -858,7 +522,7 @@ fn knife(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
 }
 
 /// A ball (an ellipsoid for unequal sizes): red with a white band around its equator.
-fn projectile(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
+pub(super) fn projectile(p: DVec3, h: DVec3) -> Option<(u16, Rgb)> {
     let q = p / h;
     if q.length() > 1.0 {
         return None;
