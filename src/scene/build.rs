@@ -44,10 +44,10 @@ impl Scene {
             (Some(ply), None) => {
                 let full = self.base_dir.join(ply);
                 report.source = full.display().to_string();
-                let (cloud, ply_report) =
-                    crate::splat::ply::read_ply(&full).map_err(|e| fail(e.to_string()))?;
-                report.skipped_nonfinite = ply_report.skipped_nonfinite;
-                report.skipped_degenerate = ply_report.skipped_degenerate;
+                let (cloud, read) =
+                    crate::splat::formats::read_splats(&full).map_err(|e| fail(e.to_string()))?;
+                report.skipped_nonfinite = read.skipped_nonfinite;
+                report.skipped_degenerate = read.skipped_degenerate;
                 cloud
             }
             (None, Some(spec)) => {

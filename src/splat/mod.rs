@@ -1,10 +1,16 @@
 //! Gaussian clouds: the in-memory representation, PLY input/output, spherical harmonics,
 //! and procedural objects (docs/method.md §1, §5).
 
+pub mod antimatter;
 pub mod assets;
+pub mod codec;
+pub mod compressed_ply;
+pub mod formats;
 pub mod ply;
 pub mod procedural;
 pub mod sh;
+pub mod sog;
+pub mod spz;
 
 use glam::{Mat3, Quat, Vec3};
 

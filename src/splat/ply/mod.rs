@@ -164,7 +164,10 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
 // ---------------------------------------------------------------------------------------
 // Header
 
-fn parse_header(bytes: &[u8], file: &str) -> Result<(ply_rs_bw::ply::Header, usize), PlyError> {
+pub(crate) fn parse_header(
+    bytes: &[u8],
+    file: &str,
+) -> Result<(ply_rs_bw::ply::Header, usize), PlyError> {
     let mut rest = bytes;
     let header = {
         let mut reader = Reader::new(&mut rest);
