@@ -148,6 +148,10 @@ struct RenderArgs {
     /// frame) as a standard 3DGS PLY: DIR/frame_00000.ply, …
     #[arg(long, value_name = "DIR")]
     export_ply: Option<PathBuf>,
+    /// Also write each rendered frame's Gaussians as SPZ (version 3, gzip; an order of
+    /// magnitude smaller than PLY, opened by web viewers): DIR/frame_00000.spz, …
+    #[arg(long, value_name = "DIR")]
+    export_spz: Option<PathBuf>,
     /// Quick look at a 3DGS PLY file without a scene file: an orbit framing its bounds.
     #[arg(long, conflicts_with = "scene")]
     ply: Option<PathBuf>,
@@ -172,7 +176,7 @@ struct RenderArgs {
     /// Render-only: take each frame's Gaussians from DIR/frame_NNNNN.ply (as written by
     /// --export-ply) instead of building and simulating the scene; the scene gives the
     /// camera path and output settings. For splitting frame ranges over machines.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply", "export_spz"])]
     from_states: Option<PathBuf>,
     /// After rendering, assemble the frames into a video with ffmpeg (which must be on
     /// the PATH; checked before rendering starts).
@@ -316,6 +320,7 @@ impl RenderArgs {
             height: self.height,
             quality: self.quality,
             export_ply: self.export_ply,
+            export_spz: self.export_spz,
             resume: self.resume,
             deterministic: self.deterministic,
             checkpoint_every: self.checkpoint_every,

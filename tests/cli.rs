@@ -996,10 +996,11 @@ fn bad_simulation_input_is_named() {
     assert_mentions(&line, &["objects[0].physics.material.E", "-5"]);
 }
 
-/// `--export-ply DIR` writes one standard 3DGS PLY per rendered frame, readable back, with
-/// the simulated object moved between frames.
+/// `--export-ply DIR` and `--export-spz DIR` write one standard 3DGS PLY and one SPZ per
+/// rendered frame, readable back, with the simulated object moved between frames, the
+/// same Gaussians in both (within SPZ's quantisation) and the region labels in both.
 #[test]
-fn export_ply_writes_a_cloud_per_frame() {
+fn export_ply_and_spz_write_a_cloud_per_frame() {
     let dir = workdir();
     write(dir.path(), "sim.json", &sim_scene(2, "", 200.0));
     let out = splatter(
@@ -1011,6 +1012,8 @@ fn export_ply_writes_a_cloud_per_frame() {
             "frames",
             "--export-ply",
             "plys",
+            "--export-spz",
+            "spzs",
         ],
     );
     expect_success(&out);
@@ -1018,15 +1021,48 @@ fn export_ply_writes_a_cloud_per_frame() {
         list(&dir.path().join("plys")),
         ["frame_00000.ply", "frame_00001.ply"]
     );
-    let read = |name: &str| {
-        splatter::splat::ply::read_ply(&dir.path().join("plys").join(name))
+    assert_eq!(
+        list(&dir.path().join("spzs")),
+        ["frame_00000.spz", "frame_00001.spz"]
+    );
+    let read = |sub: &str, name: &str| {
+        splatter::splat::formats::read_splats(&dir.path().join(sub).join(name))
             .unwrap()
             .0
     };
-    let (a, b) = (read("frame_00000.ply"), read("frame_00001.ply"));
+    let (a, b) = (
+        read("plys", "frame_00000.ply"),
+        read("plys", "frame_00001.ply"),
+    );
     assert_eq!(a.len(), b.len());
     assert_ne!(
         a.positions, b.positions,
         "the cube should move between the exported frames"
     );
+    let s = read("spzs", "frame_00001.spz");
+    assert_eq!(s.len(), b.len());
+    let worst = s
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 2.2e-4,
+        "SPZ positions within 12 fractional bits: {worst}"
+    );
+    assert_eq!(s.labels, b.labels);
+    assert_eq!(s.label_names, b.label_names);
+    let size = |sub: &str, name: &str| {
+        std::fs::metadata(dir.path().join(sub).join(name))
+            .unwrap()
+            .len()
+    };
+    println!(
+        "frame 1: PLY {} bytes, SPZ {} bytes; labels {:?}",
+        size("plys", "frame_00001.ply"),
+        size("spzs", "frame_00001.spz"),
+        s.label_names
+    );
+    assert!(size("spzs", "frame_00001.spz") * 5 < size("plys", "frame_00001.ply"));
 }

@@ -317,6 +317,96 @@ fn ply_reader_survives_random_truncated_and_oversized_files() {
     );
 }
 
+// ---------------------------------------------------------------------------------------------
+// The other splat formats
+// ---------------------------------------------------------------------------------------------
+
+/// Every compact format's reader on truncated and byte-flipped copies of a real file (the
+/// fixtures splat-transform wrote, and what our writers write): an error or a cloud, never
+/// a panic, and no allocation far beyond what the declared counts could hold.
+#[test]
+fn splat_format_readers_survive_truncated_and_flipped_files() {
+    use splatter::splat::formats::{read_splats_bytes, write_splats_bytes, WriteFormat};
+    use splatter::splat::spz::SpzVersion;
+    let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
+    let seed = 0x5eed_0005;
+    let mut r = SplitMix64::new(seed);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/formats");
+    let small = random_cloud(&mut r, 300, 1);
+    let mut files: Vec<(String, Vec<u8>)> = [
+        "donut_4k.v3.spz",
+        "donut_4k.v4.spz",
+        "donut_4k.splat",
+        "donut_4k.compressed.ply",
+        "donut_4k.sog",
+    ]
+    .iter()
+    .map(|n| (n.to_string(), std::fs::read(dir.join(n)).unwrap()))
+    .collect();
+    for (name, f) in [
+        ("ours.v3.spz", WriteFormat::Spz(SpzVersion::V3)),
+        ("ours.v4.spz", WriteFormat::Spz(SpzVersion::V4)),
+        ("ours.splat", WriteFormat::Splat),
+    ] {
+        files.push((
+            name.to_string(),
+            write_splats_bytes(&small, f, name).unwrap(),
+        ));
+    }
+    let cases = 1_500;
+    let (mut ok, mut err) = (0, 0);
+    for case in 0..cases {
+        let (name, valid) = &files[case % files.len()];
+        let mut input = valid.clone();
+        match below(&mut r, 3) {
+            0 => input.truncate(below(&mut r, valid.len())),
+            1 => {
+                for _ in 0..1 + below(&mut r, 8) {
+                    let i = below(&mut r, input.len());
+                    input[i] ^= 1 << below(&mut r, 8);
+                }
+            }
+            _ => {
+                // Flip bytes in the first 64 (the headers and tables of contents).
+                for _ in 0..1 + below(&mut r, 3) {
+                    let i = below(&mut r, input.len().min(64));
+                    input[i] = r.next_u64() as u8;
+                }
+            }
+        }
+        let path = Path::new("fuzz").join(name);
+        let mut outcome = None;
+        let largest = run_case("formats", seed, case, &input, || {
+            outcome = Some(read_splats_bytes(&input, &path).map(|(c, _)| c.len()));
+        });
+        // A decoded Gaussian takes ≤ 240 bytes; the compact formats spend ≥ 2 bits of
+        // compressed input per byte of stream, and SOG images expand ~8× as RGBA.
+        let bound = 2048 * input.len() + (16 << 20);
+        assert!(
+            largest <= bound,
+            "{name}: case {case}: an allocation of {largest} bytes for a {}-byte input",
+            input.len()
+        );
+        match outcome {
+            Some(Ok(_)) => ok += 1,
+            Some(Err(e)) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.contains(name.as_str()) && !msg.contains('\n'),
+                    "one line naming the file: {msg}"
+                );
+                err += 1;
+            }
+            None => unreachable!(),
+        }
+    }
+    eprintln!("formats: {cases} cases: {ok} read, {err} refused");
+    assert!(
+        err > cases / 4 && ok > 0,
+        "the mutations reach both outcomes"
+    );
+}
+
 #[test]
 fn ply_header_claiming_a_trillion_vertices_is_refused_without_allocating() {
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());

@@ -1,5 +1,7 @@
-//! `--export-ply`: the Gaussians of a frame, as the renderer draws them, written as a
-//! standard 3DGS PLY so that any splat viewer can play a simulation. Each covariance is
+//! `--export-ply` and `--export-spz`: the Gaussians of a frame, as the renderer draws them,
+//! written as a standard 3DGS PLY or as SPZ so that any splat viewer can play a simulation,
+//! region labels included (PLY: an integer property and header comments; SPZ: an extension
+//! record, docs/formats.md). Each covariance is
 //! folded back into scale and rotation (its eigen-decomposition), and SH coefficients are
 //! rotated from the Gaussian's rest frame into the world frame (viewers have no
 //! per-Gaussian frame).
@@ -13,13 +15,43 @@ use crate::render::gpu::layout::GaussianIn;
 use crate::render::splats::mat3_from_sym3;
 use crate::render::Splats;
 use crate::sim::svd::symmetric_eigen;
-use crate::splat::ply::{write_ply, PlyError, PlyFormat};
+use crate::splat::formats::{write_splats, SplatError, WriteFormat};
 use crate::splat::sh::ShRotator;
-use crate::splat::GaussianCloud;
+use crate::splat::spz::SpzVersion;
+use crate::splat::{GaussianCloud, NO_LABEL};
+
+/// A per-frame export format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Export {
+    Ply,
+    Spz,
+}
+
+impl Export {
+    fn extension(self) -> &'static str {
+        match self {
+            Export::Ply => "ply",
+            Export::Spz => "spz",
+        }
+    }
+
+    /// What its directory is called in messages.
+    pub fn directory_name(self) -> &'static str {
+        match self {
+            Export::Ply => "PLY export directory",
+            Export::Spz => "SPZ export directory",
+        }
+    }
+}
 
 /// `DIR/frame_00042.ply`.
 pub fn frame_ply_path(dir: &Path, frame: u32) -> PathBuf {
-    dir.join(format!("frame_{frame:05}.ply"))
+    frame_file(dir, frame, Export::Ply)
+}
+
+/// `DIR/frame_00042.<ext>` for the export format.
+pub fn frame_file(dir: &Path, frame: u32, format: Export) -> PathBuf {
+    dir.join(format!("frame_{frame:05}.{}", format.extension()))
 }
 
 /// The cloud a viewer should see for `gaussians` (renderer records), with the SH of `splats`
@@ -69,8 +101,21 @@ pub fn world_cloud(
         .collect();
     let mut cloud = GaussianCloud {
         sh_degree: splats.sh_degree,
+        labels: splats.labels.clone(),
+        label_names: splats.label_names.clone(),
         ..Default::default()
     };
+    // Gaussians of unlabelled objects merged with labelled ones carry NO_LABEL; files
+    // name every label they use.
+    if cloud.labels.contains(&NO_LABEL) {
+        let id = cloud.label_names.len() as u16;
+        cloud.label_names.push("unlabelled".into());
+        for l in &mut cloud.labels {
+            if *l == NO_LABEL {
+                *l = id;
+            }
+        }
+    }
     for (mean, scale, rotation, opacity, sh) in parts {
         cloud.positions.push(mean);
         cloud.scales.push(scale);
@@ -81,19 +126,19 @@ pub fn world_cloud(
     cloud
 }
 
-/// Write frame `frame`'s Gaussians to `DIR/frame_NNNNN.ply` (binary, atomically).
+/// Write frame `frame`'s Gaussians (the world cloud of [`world_cloud`]) to
+/// `DIR/frame_NNNNN.<ext>`, atomically.
 pub fn export_frame(
     dir: &Path,
     frame: u32,
-    gaussians: &[GaussianIn],
-    splats: &Splats,
-    rotator: &ShRotator,
-) -> Result<PathBuf, PlyError> {
-    let path = frame_ply_path(dir, frame);
-    write_ply(
-        &path,
-        &world_cloud(gaussians, splats, rotator),
-        PlyFormat::BinaryLittleEndian,
-    )?;
+    cloud: &GaussianCloud,
+    format: Export,
+) -> Result<PathBuf, SplatError> {
+    let path = frame_file(dir, frame, format);
+    let write = match format {
+        Export::Ply => WriteFormat::Ply,
+        Export::Spz => WriteFormat::Spz(SpzVersion::V3),
+    };
+    write_splats(&path, cloud, write)?;
     Ok(path)
 }

@@ -69,6 +69,8 @@ pub struct RunOptions {
     pub quality: Quality,
     /// Also write each frame's Gaussians as a 3DGS PLY into this directory.
     pub export_ply: Option<PathBuf>,
+    /// Also write each frame's Gaussians as SPZ (version 3) into this directory.
+    pub export_spz: Option<PathBuf>,
     /// Skip frames already written and restart the simulation from the checkpoint.
     pub resume: bool,
     /// Sum P2G in a fixed order: bit-identical frames on the same adapter.
@@ -79,6 +81,19 @@ pub struct RunOptions {
     pub video: Option<PathBuf>,
     /// Count the pieces of every simulated object per frame (`OUT/fragments.csv`).
     pub fragments: bool,
+}
+
+impl RunOptions {
+    /// The per-frame Gaussian exports asked for: (directory, format).
+    pub fn exports(&self) -> impl Iterator<Item = (&Path, crate::output::export::Export)> {
+        use crate::output::export::Export;
+        [
+            (self.export_ply.as_deref(), Export::Ply),
+            (self.export_spz.as_deref(), Export::Spz),
+        ]
+        .into_iter()
+        .filter_map(|(d, f)| d.map(|d| (d, f)))
+    }
 }
 
 impl Default for RunOptions {
@@ -92,6 +107,7 @@ impl Default for RunOptions {
             height: None,
             quality: Quality::Standard,
             export_ply: None,
+            export_spz: None,
             resume: false,
             deterministic: false,
             checkpoint_every: 10,
@@ -242,9 +258,8 @@ impl Job {
         frame_path(dir, frame).is_file()
             && self
                 .opts
-                .export_ply
-                .as_deref()
-                .is_none_or(|d| crate::output::export::frame_ply_path(d, frame).is_file())
+                .exports()
+                .all(|(d, format)| crate::output::export::frame_file(d, frame, format).is_file())
     }
 
     /// The manifest of this run; with `--resume`, the frame timings of an earlier run of

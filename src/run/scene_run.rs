@@ -48,8 +48,8 @@ pub(super) fn execute(
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
     create_dir(&dir, "output directory")?;
-    if let Some(d) = &opts.export_ply {
-        create_dir(d, "PLY export directory")?;
+    for (d, format) in opts.exports() {
+        create_dir(d, format.directory_name())?;
     }
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
@@ -145,6 +145,7 @@ pub(super) fn execute(
         resumed_from: resume_from.as_ref().map(|cp| cp.frame),
         from_states: None,
         export_ply: opts.export_ply.clone(),
+        export_spz: opts.export_spz.clone(),
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
@@ -163,7 +164,7 @@ pub(super) fn execute(
         splats: &splats,
         lighting: lighting.as_ref(),
         gpu_normals,
-        rotator: opts.export_ply.as_ref().map(|_| ShRotator::new()),
+        rotator: opts.exports().next().map(|_| ShRotator::new()),
         fragment_log,
         checkpoint_file: checkpoint_path(&dir),
         sink: Sink::new(dir, manifest),
@@ -449,9 +450,12 @@ impl Frames<'_> {
         let gpu = self.gpu;
         let scene = &self.job.scene;
         let t1 = Instant::now();
-        if let (Some(dir), Some(rotator)) = (&self.job.opts.export_ply, &self.rotator) {
+        if let Some(rotator) = &self.rotator {
             let gaussians = self.renderer.read_gaussians(gpu)?;
-            crate::output::export::export_frame(dir, frame, &gaussians, self.splats, rotator)?;
+            let cloud = crate::output::export::world_cloud(&gaussians, self.splats, rotator);
+            for (dir, format) in self.job.opts.exports() {
+                crate::output::export::export_frame(dir, frame, &cloud, format)?;
+            }
         }
         if let Some(l) = self.lighting {
             self.renderer

@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
 """Compare decoded PLYs (e.g. splat-transform X -> .ply) with the source PLY.
 
-Usage: compare.py SOURCE.ply DECODED.ply [more DECODED.ply ...]
+Usage: compare.py [--order MORTON.ply] SOURCE.ply DECODED.ply [more DECODED.ply ...]
 Needs numpy and scipy (this analysis script only; make_subset.py needs neither).
 
 For each decoded file it prints: the count; which axis map (identity or a flip of one
 or two axes) puts the decoded positions onto the source; whether row order is kept
-(row i within the quantisation of source row i) or else a one-to-one matching by
-position (min-weight bipartite matching over 8 nearest neighbours); then, after
+(row i within the quantisation of source row i), or follows the order of MORTON.ply
+(a lossless reordering of SOURCE, e.g. `splat-transform SOURCE.ply -m MORTON.ply`),
+or else a one-to-one matching by position (min-weight bipartite matching over 8
+nearest neighbours; plain nearest neighbour above 20,000 rows); then, after
 matching, max / mean abs difference per field.  For fields a format clips (opacity,
 f_dc, log-scale) it also prints the max difference over the rows whose source value
 lies inside the decoded range ("in range").  Quaternions are compared after
@@ -56,7 +58,7 @@ def match(P, Q, tree):
     dist, nn = tree.query(Q, k=k)
     if len(P) != len(Q):
         return nn[:, 0]
-    if len(np.unique(nn[:, 0])) == len(P):
+    if len(np.unique(nn[:, 0])) == len(P) or len(P) > 20000:
         return nn[:, 0]
     rows = np.repeat(np.arange(len(Q)), k)
     w = csr_matrix((dist.ravel() + 1e-12, (rows, nn.ravel())), shape=(len(Q), len(P)))
@@ -69,7 +71,21 @@ def sigmoid(x):
         return 1.0 / (1.0 + np.exp(-x))
 
 
-def report(src, n, tree, path):
+def exact_perm(src, ref):
+    """idx with ref row j == src row idx[j] (ref is a lossless reordering of src)."""
+    keys = sorted(src)
+    a = np.stack([src[k] for k in keys], 1)
+    b = np.stack([ref[k] for k in keys], 1)
+    ia = np.lexsort(a.T[::-1])
+    ib = np.lexsort(b.T[::-1])
+    if not np.array_equal(a[ia], b[ib]):
+        raise SystemExit("--order file is not a reordering of the source")
+    idx = np.empty(len(b), dtype=np.int64)
+    idx[ib] = ia
+    return idx
+
+
+def report(src, n, tree, path, order=None):
     dec, m = read_ply(path)
     print("== %s" % path)
     print("  count: source %d, decoded %d%s" % (n, m, "" if n == m else "  (CHANGED)"))
@@ -89,9 +105,19 @@ def report(src, n, tree, path):
     if m == n:
         ident = np.abs(Qs - P).max()
         kept = ident < 1e-3 * extent
+    follows = False
+    if not kept and order is not None and m == n:
+        oidx = order[1]
+        dev = np.abs(Qs - positions(order[0])).max()
+        follows = dev < 1e-3 * extent
     if kept:
         idx = np.arange(n)
         print("  order: KEPT (row i -> source row i; max position diff in place %.3g)" % ident)
+    elif follows:
+        idx = oidx
+        print("  order: REORDERED, exactly as the --order (Morton) file (max position diff"
+              " against it in place %.3g); rows left in place: %d of %d"
+              % (dev, np.sum(idx == np.arange(n)), n))
     else:
         idx = match(P, Qs, tree)
         print("  order: REORDERED (rows left in place: %d of %d); matched one-to-one by position"
@@ -135,10 +161,18 @@ def report(src, n, tree, path):
 
 
 def main():
-    src, n = read_ply(sys.argv[1])
+    args = sys.argv[1:]
+    order_path = None
+    if args and args[0] == "--order":
+        order_path, args = args[1], args[2:]
+    src, n = read_ply(args[0])
     tree = cKDTree(positions(src))
-    for path in sys.argv[2:]:
-        report(src, n, tree, path)
+    order = None
+    if order_path:
+        ref, _ = read_ply(order_path)
+        order = (ref, exact_perm(src, ref))
+    for path in args[1:]:
+        report(src, n, tree, path, order)
 
 
 if __name__ == "__main__":
