@@ -5,6 +5,7 @@
 pub mod export;
 pub mod manifest;
 mod progress;
+pub mod text;
 pub mod video;
 
 pub use progress::Progress;

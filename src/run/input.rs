@@ -87,7 +87,8 @@ pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, Bui
     Ok((scene, path, splats, report))
 }
 
-/// `--ply FILE`: the capture alone, framed by an orbit round its bounds, or seen from a
+/// `--ply FILE`: the capture alone, stood upright and framed by an orbit round its robust
+/// bounds (docs/captures.md), or seen from a
 /// camera of an INRIA `cameras.json`.
 fn quick_look(
     opts: &RunOptions,
@@ -98,7 +99,7 @@ fn quick_look(
     let text = format!(
         r#"{{"output": {{"width": {w}, "height": {h}, "frames": 60}},
             "camera": {{"fov_y_deg": 50, "path": {{"type": "orbit", "target": [0, 0, 0], "radius": 1}}}},
-            "objects": [{{"ply": {p}}}]}}"#,
+            "objects": [{{"ply": {p}, "transform": {{"up": "auto"}}}}]}}"#,
         w = opts.width.unwrap_or(1280),
         h = opts.height.unwrap_or(720),
         p = serde_json::to_string(&ply.to_string_lossy())?,
@@ -129,10 +130,9 @@ fn quick_look(
             CameraPath::still(*camera)
         }
         None => {
-            let bounds = splats.means.iter().fold(
-                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-            );
+            // Stood upright (`up: auto`), framed by the robust bounds: floaters do not
+            // shrink the object in the frame.
+            let bounds = crate::splat::inspect::robust_bounds(&splats.means);
             let (w, h) = (scene.output.width, scene.output.height);
             CameraPath::orbit_framing(bounds, Vec3::Z, 50.0, w, h, scene.output.frames)
         }

@@ -16,6 +16,7 @@
 mod fragments;
 mod from_states;
 mod input;
+pub mod preview;
 mod scene_run;
 
 pub use fragments::FragmentLog;
@@ -217,6 +218,20 @@ impl Run {
     /// The frames this run renders.
     pub fn frames(&self) -> Range<u32> {
         self.job.frames.clone()
+    }
+
+    /// The camera of every frame.
+    pub fn camera_path(&self) -> &CameraPath {
+        &self.job.path
+    }
+
+    /// The scene's Gaussians as placed in the world (None for `--from-states`, which
+    /// loads them per frame).
+    pub fn splats(&self) -> Option<&Splats> {
+        match &self.source {
+            Source::Built { splats, .. } => Some(splats),
+            Source::States(_) => None,
+        }
     }
 
     /// Run every frame on `gpu`, reporting progress to `on_event`.

@@ -324,10 +324,20 @@ pub struct ObjectSpec {
     pub shading: Option<lighting::ShadingSpec>,
 }
 
-/// x_world = R · diag(scale) · x_object + translate, R from `rotate_deg`.
+/// x_world = R · U · diag(scale) · x_object + translate: U turns the object's `up` to +z,
+/// R is `rotate_deg`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TransformSpec {
+    /// Which way is up in the object's own frame, turned to +z before `rotate_deg`:
+    /// `"auto"` (estimated from the capture; `splatter inspect` shows the evidence), a
+    /// signed axis (`"+x"`, `"-y"`, …) or a vector [x, y, z]. Default: the object's +z.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<UpSpec>,
+    /// `up: "auto"` as estimated when the scene was loaded ([`Scene::resolve_up`]).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub resolved_up: Option<Vec3>,
     /// Translation. Default [0, 0, 0].
     #[serde(default)]
     pub translate: [f32; 3],
@@ -364,11 +374,41 @@ impl Scale {
     }
 }
 
+/// `transform.up`: `"auto"`, a signed axis name, or a vector.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(
+    untagged,
+    expecting = "`up`: \"auto\", an axis such as \"-y\", or an array of 3 numbers"
+)]
+pub enum UpSpec {
+    Named(String),
+    Vector([f32; 3]),
+}
+
+impl UpSpec {
+    /// The up vector, None for `auto` (resolved from the data) or an invalid value.
+    pub fn vector(&self) -> Option<Vec3> {
+        match self {
+            UpSpec::Named(n) => crate::splat::inspect::axis_vector(n),
+            UpSpec::Vector(v) => Vec3::from_array(*v).try_normalize(),
+        }
+    }
+
+    pub fn is_auto(&self) -> bool {
+        matches!(self, UpSpec::Named(n) if n == "auto")
+    }
+}
+
 impl TransformSpec {
-    /// Rotation R = Rz · Ry · Rx of `rotate_deg`.
+    /// Rotation R · U: `up` turned to +z, then R = Rz · Ry · Rx of `rotate_deg`.
     pub fn rotation(&self) -> Mat3 {
         let [x, y, z] = self.rotate_deg.map(f32::to_radians);
-        Mat3::from_rotation_z(z) * Mat3::from_rotation_y(y) * Mat3::from_rotation_x(x)
+        let euler = Mat3::from_rotation_z(z) * Mat3::from_rotation_y(y) * Mat3::from_rotation_x(x);
+        let up = self
+            .resolved_up
+            .or_else(|| self.up.as_ref().and_then(UpSpec::vector))
+            .unwrap_or(Vec3::Z);
+        euler * crate::splat::inspect::upright_rotation(up)
     }
 
     /// The affine map x ↦ M x + t with M = R · diag(scale).
@@ -436,6 +476,7 @@ pub fn parse(text: &str, origin: &str, base_dir: &Path) -> Result<Scene, SceneEr
         .filter(|s| !s.is_empty())
         .unwrap_or_else(|| "scene".into());
     scene.validate()?;
+    scene.resolve_up()?;
     Ok(scene)
 }
 

@@ -348,6 +348,17 @@ impl Scene {
         let t = &obj.transform;
         check_finite3(o, &f("transform.translate"), t.translate)?;
         check_finite3(o, &f("transform.rotate_deg"), t.rotate_deg)?;
+        if let Some(up) = &t.up {
+            if !up.is_auto() && up.vector().is_none() {
+                let value = serde_json::to_string(up).unwrap_or_default();
+                return Err(SceneError::invalid(
+                    o,
+                    f("transform.up"),
+                    value,
+                    "\"auto\", a signed axis (\"+x\", \"-x\", \"+y\", \"-y\", \"+z\", \"-z\") or a non-zero vector [x, y, z]",
+                ));
+            }
+        }
         let s = t.scale.as_vec3();
         if !s.is_finite() || s.min_element() <= 0.0 {
             let value = match t.scale {

@@ -3,8 +3,7 @@
 //! alpha = sigmoid(logit)), and the rotation as bytes `w x y z` mapped by (q·128 + 128).
 //! Only SH degree 0 fits; higher coefficients are dropped on writing.
 
-use super::codec::{decode_parallel, to_u8, Builder, Decoded, SH_C0};
-use super::formats::{Format, SplatError};
+use super::codec::{decode_parallel, to_u8, Builder, Decoded, Format, SplatError, SH_C0};
 use super::GaussianCloud;
 
 pub const RECORD: usize = 32;

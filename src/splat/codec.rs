@@ -2,9 +2,69 @@
 //! quantisers and a builder that turns decoded values into a [`GaussianCloud`] with the
 //! same rules for broken Gaussians as the PLY reader (docs/formats.md).
 
+use std::fmt;
+
 use glam::{Quat, Vec3};
 
+use super::ply::PlyError;
 use super::{sh_coeff_count, GaussianCloud};
+
+/// A splat file format.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// graphdeco / INRIA 3DGS PLY (nerfstudio, Brush, Mip-Splatting write it too).
+    Ply,
+    /// SuperSplat / PlayCanvas `compressed.ply`.
+    CompressedPly,
+    /// antimatter15 `.splat`.
+    Splat,
+    /// Niantic SPZ.
+    Spz,
+    /// PlayCanvas SOG (`meta.json` + WebP images, or a `.sog` zip).
+    Sog,
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Format::Ply => "3DGS PLY",
+            Format::CompressedPly => "compressed PLY",
+            Format::Splat => ".splat",
+            Format::Spz => "SPZ",
+            Format::Sog => "SOG",
+        })
+    }
+}
+
+/// Reading or writing a splat file failed. Every message starts with the file name, and
+/// names the format the file looks like.
+#[derive(Debug, thiserror::Error)]
+pub enum SplatError {
+    #[error("{file}: cannot {action}: {source}")]
+    Io {
+        file: String,
+        action: &'static str,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Ply(#[from] PlyError),
+    #[error("{file}: damaged {format} file: {what}")]
+    Damaged {
+        file: String,
+        format: Format,
+        what: String,
+    },
+    #[error("{file}: {format} {what} is not supported (expected {expected})")]
+    Unsupported {
+        file: String,
+        format: Format,
+        what: String,
+        expected: &'static str,
+    },
+    #[error("{file}: not a splat file this program reads: {what} (expected a 3DGS PLY, a compressed.ply, an SPZ, a SOG folder or .sog, or a .splat)")]
+    Unknown { file: String, what: String },
+}
 
 /// The degree-0 real spherical harmonic, Y₀₀ = 1/(2√π): display colour = 0.5 + C0 · DC.
 pub const SH_C0: f32 = 0.282_094_8;

@@ -7,8 +7,7 @@
 
 use ply_rs_bw::ply::{ElementDef, Header, PropertyType, ScalarType};
 
-use super::codec::{decode_parallel, Builder, Decoded, SH_C0};
-use super::formats::{Format, SplatError};
+use super::codec::{decode_parallel, Builder, Decoded, Format, SplatError, SH_C0};
 
 /// Gaussians per chunk.
 pub const CHUNK: usize = 256;

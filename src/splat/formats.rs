@@ -2,70 +2,14 @@
 //! told by the content (magic bytes, the PLY header), with the extension only for the one
 //! format that has no signature (antimatter15 `.splat`).
 
-use std::fmt;
 use std::path::Path;
 
 use super::codec::Builder;
-use super::ply::{PlyError, PlyFormat};
+use super::ply::PlyFormat;
 use super::spz::SpzVersion;
 use super::{antimatter, compressed_ply, ply, sog, spz, GaussianCloud};
 
-/// A splat file format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    /// graphdeco / INRIA 3DGS PLY (nerfstudio, Brush, Mip-Splatting write it too).
-    Ply,
-    /// SuperSplat / PlayCanvas `compressed.ply`.
-    CompressedPly,
-    /// antimatter15 `.splat`.
-    Splat,
-    /// Niantic SPZ.
-    Spz,
-    /// PlayCanvas SOG (`meta.json` + WebP images, or a `.sog` zip).
-    Sog,
-}
-
-impl fmt::Display for Format {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Format::Ply => "3DGS PLY",
-            Format::CompressedPly => "compressed PLY",
-            Format::Splat => ".splat",
-            Format::Spz => "SPZ",
-            Format::Sog => "SOG",
-        })
-    }
-}
-
-/// Reading or writing a splat file failed. Every message starts with the file name, and
-/// names the format the file looks like.
-#[derive(Debug, thiserror::Error)]
-pub enum SplatError {
-    #[error("{file}: cannot {action}: {source}")]
-    Io {
-        file: String,
-        action: &'static str,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error(transparent)]
-    Ply(#[from] PlyError),
-    #[error("{file}: damaged {format} file: {what}")]
-    Damaged {
-        file: String,
-        format: Format,
-        what: String,
-    },
-    #[error("{file}: {format} {what} is not supported (expected {expected})")]
-    Unsupported {
-        file: String,
-        format: Format,
-        what: String,
-        expected: &'static str,
-    },
-    #[error("{file}: not a splat file this program reads: {what} (expected a 3DGS PLY, a compressed.ply, an SPZ, a SOG folder or .sog, or a .splat)")]
-    Unknown { file: String, what: String },
-}
+pub use super::codec::{Format, SplatError};
 
 /// What [`read_splats`] found besides the Gaussians.
 #[derive(Clone, Debug, PartialEq, Eq)]

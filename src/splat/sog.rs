@@ -10,8 +10,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use super::codec::{decode_parallel, Builder, Decoded};
-use super::formats::{Format, SplatError};
+use super::codec::{decode_parallel, Builder, Decoded, Format, SplatError};
 
 fn damaged(file: &str, what: impl Into<String>) -> SplatError {
     SplatError::Damaged {

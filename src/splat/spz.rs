@@ -13,15 +13,13 @@ use std::io::Read;
 
 use rayon::prelude::*;
 
-use super::codec::{decode_parallel, to_u8, Builder, Decoded};
-use super::formats::{Format, SplatError};
+use super::codec::{decode_parallel, to_u8, Builder, Decoded, Format, SplatError};
 use super::{sh_coeff_count, GaussianCloud, NO_LABEL};
 
 /// `NGSP`, little-endian.
 pub const MAGIC: u32 = 0x5053_474e;
 /// The colour scale of the DC term: byte = DC · 0.15 · 255 + 127.5.
 const COLOR_SCALE: f32 = 0.15;
-const FLAG_ANTIALIASED: u8 = 0x1;
 const FLAG_EXTENSIONS: u8 = 0x2;
 /// Our extension record: per-Gaussian region labels and their names.
 pub const LABELS_EXTENSION: u32 = 0x5350_4c01;
@@ -559,13 +557,13 @@ fn header_bytes(cloud: &GaussianCloud, version: u32, fb: u32, flags: u8) -> Vec<
     h
 }
 
-/// Encode `cloud` as SPZ. `antialiased` sets the header flag for Mip-Splatting captures.
+/// Encode `cloud` as SPZ. The header's antialiased flag (Mip-Splatting captures) is not set:
+/// the cloud does not record it, and our renderer draws every capture the same way.
 pub fn write(cloud: &GaussianCloud, version: SpzVersion) -> Vec<u8> {
     let fb = fractional_bits(cloud);
     let streams = encode_streams(cloud, fb);
     let ext = labels_record(cloud);
     let flags = if ext.is_empty() { 0 } else { FLAG_EXTENSIONS };
-    let _ = FLAG_ANTIALIASED;
     match version {
         SpzVersion::V3 => {
             use std::io::Write;

@@ -1,24 +1,12 @@
 //! PNG charts of the studies with `plotters` (bitmap backend into a buffer, encoded by the
-//! `image` crate the renderer already uses). Text is drawn with ab_glyph from an embedded
-//! DejaVu Sans Mono (assets/fonts/, Bitstream Vera licence), so nothing depends on the
-//! machine's fonts.
+//! `image` crate the renderer already uses). Text: [`crate::output::text`].
 
 use std::path::Path;
-use std::sync::Once;
 
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
-
-/// ab_glyph needs the font registered once per process under the family name we use.
-fn register_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // Only fails on a malformed font, which the embedded file is not (tested).
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    });
-}
+use crate::output::text::register_font;
 
 /// A colour per series index (colour-blind friendly Tableau-like palette).
 pub fn palette(i: usize) -> RGBColor {

@@ -1,0 +1,414 @@
+//! What a capture holds, for a user about to simulate it (docs/captures.md): robust bounds
+//! next to the full ones, the floaters, opacity and scale statistics, the up axis, the
+//! support under the object and the transform that stands it upright on a chosen height.
+//!
+//! Captures come in whatever frame their reconstruction chose (COLMAP's is y-down, many
+//! are y-up, none is guaranteed z-up), so the up axis is estimated from the geometry:
+//! 1. **A support plane**: the dominant plane of the robust core (RANSAC), when it holds a
+//!    good share of the Gaussians and nearly all others lie on one side of it (a table or
+//!    floor under the object). Up is its normal, towards the object.
+//! 2. **A seen top**: otherwise, along each of the six axis directions, the share of
+//!    Gaussians in the highest 5% of the height range minus the share in the lowest 5%.
+//!    Cameras circle an object from above, so its top is seen from every view and densely
+//!    reconstructed while the side it stood on was never seen: the direction with the
+//!    clearly largest difference is up.
+//! 3. **The camera convention**: when neither decides, −y (COLMAP's and OpenCV's frames
+//!    point y down the image, so the first camera's −y is the world's up).
+//!
+//! All three can be wrong for a given capture (an object photographed from below, a
+//! capture whose densest layer is its base); the report prints the evidence and the
+//! preview shows the result, and a scene can name the axis instead (`"up": "+z"`).
+
+use glam::{Mat3, Vec3};
+
+use super::GaussianCloud;
+use crate::rng::SplitMix64;
+
+/// Percentiles of one quantity.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Spread {
+    pub p1: f32,
+    pub median: f32,
+    pub p99: f32,
+}
+
+impl Spread {
+    fn of(mut v: Vec<f32>) -> Spread {
+        if v.is_empty() {
+            return Spread::default();
+        }
+        v.sort_by(f32::total_cmp);
+        let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+        Spread {
+            p1: at(0.01),
+            median: at(0.5),
+            p99: at(0.99),
+        }
+    }
+}
+
+/// How the up axis was decided.
+#[derive(Clone, Debug, PartialEq)]
+pub enum UpEvidence {
+    /// The normal of a support plane holding `share` of the core's Gaussians.
+    SupportPlane { share: f32 },
+    /// A seen top: (share in the highest 5%) − (share in the lowest 5%) along up, and the
+    /// next best direction's score.
+    SeenTop { score: f32, runner_up: f32 },
+    /// Neither decided; the camera convention's −y.
+    Convention,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Inspection {
+    pub count: usize,
+    pub sh_degree: u32,
+    pub bounds: (Vec3, Vec3),
+    /// Per-axis 1st–99th percentiles of the means.
+    pub robust: (Vec3, Vec3),
+    /// Gaussians outside the robust box grown by a quarter of its size on every side.
+    pub floaters: usize,
+    pub opacity: Spread,
+    /// The largest standard deviation of each Gaussian.
+    pub scale: Spread,
+    /// The estimated up direction (a unit vector; an axis when it is within 10° of one).
+    pub up: Vec3,
+    pub evidence: UpEvidence,
+    /// The seen-top score of each signed axis: +x, −x, +y, −y, +z, −z.
+    pub axis_scores: [f32; 6],
+    /// The support's height along `up`: the plane's, or the 1st percentile of the core's
+    /// heights (the lowest dense layer).
+    pub support: f32,
+}
+
+/// Names of the signed axes, in the order of [`Inspection::axis_scores`].
+pub const AXES: [&str; 6] = ["+x", "-x", "+y", "-y", "+z", "-z"];
+
+/// The unit vector of a signed axis name (`"+x"`, `"-y"`, `"z"`, …).
+pub fn axis_vector(name: &str) -> Option<Vec3> {
+    let (sign, axis) = match name.as_bytes() {
+        [b'-', a] => (-1.0, *a),
+        [b'+', a] | [a] => (1.0, *a),
+        _ => return None,
+    };
+    let v = match axis {
+        b'x' => Vec3::X,
+        b'y' => Vec3::Y,
+        b'z' => Vec3::Z,
+        _ => return None,
+    };
+    Some(sign * v)
+}
+
+/// The name of `v` when it is a signed axis.
+pub fn axis_name(v: Vec3) -> Option<&'static str> {
+    AXES.iter()
+        .copied()
+        .find(|n| axis_vector(n).is_some_and(|a| a.distance(v) < 1e-5))
+}
+
+/// The rotation that turns `up` into +z: a quarter or half turn about a world axis when
+/// `up` is a signed axis, else the shortest rotation.
+pub fn upright_rotation(up: Vec3) -> Mat3 {
+    let up = up.try_normalize().unwrap_or(Vec3::Z);
+    if up.distance(-Vec3::Z) < 1e-6 {
+        return Mat3::from_rotation_x(std::f32::consts::PI);
+    }
+    Mat3::from_quat(glam::Quat::from_rotation_arc(up, Vec3::Z))
+}
+
+pub fn inspect(cloud: &GaussianCloud) -> Inspection {
+    let n = cloud.len();
+    let bounds = cloud.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+    let robust = robust_bounds(&cloud.positions);
+    let size = robust.1 - robust.0;
+    let (grow_lo, grow_hi) = (robust.0 - 0.25 * size, robust.1 + 0.25 * size);
+    let floaters = cloud
+        .positions
+        .iter()
+        .filter(|p| p.cmplt(grow_lo).any() || p.cmpgt(grow_hi).any())
+        .count();
+    let core: Vec<Vec3> = (0..n)
+        .filter(|&i| {
+            let p = cloud.positions[i];
+            cloud.opacities[i] >= 0.1 && p.cmpge(robust.0).all() && p.cmple(robust.1).all()
+        })
+        .map(|i| cloud.positions[i])
+        .collect();
+    let axis_scores = AXES.map(|a| seen_top_score(&core, axis_vector(a).unwrap_or(Vec3::Z)));
+    let (up, evidence) = estimate_up(&core, size.length(), &axis_scores);
+    let mut heights: Vec<f32> = core.iter().map(|p| p.dot(up)).collect();
+    heights.sort_by(f32::total_cmp);
+    let support = match (&evidence, heights.is_empty()) {
+        (_, true) => 0.0,
+        (UpEvidence::SupportPlane { .. }, _) => support_plane(&core, size.length())
+            .map_or(heights[heights.len() / 100], |(normal, offset, _)| {
+                offset * normal.dot(up).signum()
+            }),
+        _ => heights[(heights.len() - 1) / 100],
+    };
+    Inspection {
+        count: n,
+        sh_degree: cloud.sh_degree,
+        bounds,
+        robust,
+        floaters,
+        opacity: Spread::of(cloud.opacities.clone()),
+        scale: Spread::of(cloud.scales.iter().map(|s| s.max_element()).collect()),
+        up,
+        evidence,
+        axis_scores,
+        support,
+    }
+}
+
+impl Inspection {
+    /// The transform (up rotation, then this translation) that stands the capture upright
+    /// with its support at height `support_height` and its robust centre over the origin.
+    pub fn placement(&self, support_height: f32) -> Vec3 {
+        let r = upright_rotation(self.up);
+        let centre = r * (0.5 * (self.robust.0 + self.robust.1));
+        Vec3::new(-centre.x, -centre.y, support_height - self.support)
+    }
+
+    /// The robust bounds after [`upright_rotation`] (the box of the eight rotated corners).
+    pub fn upright_robust_bounds(&self) -> (Vec3, Vec3) {
+        rotated_box(upright_rotation(self.up), self.robust)
+    }
+}
+
+/// The axis-aligned box of `m` applied to the corners of `b`.
+pub fn rotated_box(m: Mat3, b: (Vec3, Vec3)) -> (Vec3, Vec3) {
+    let mut lo = Vec3::INFINITY;
+    let mut hi = Vec3::NEG_INFINITY;
+    for c in 0..8 {
+        let p = Vec3::new(
+            if c & 1 == 0 { b.0.x } else { b.1.x },
+            if c & 2 == 0 { b.0.y } else { b.1.y },
+            if c & 4 == 0 { b.0.z } else { b.1.z },
+        );
+        lo = lo.min(m * p);
+        hi = hi.max(m * p);
+    }
+    (lo, hi)
+}
+
+/// Per-axis 1st and 99th percentiles of finite positions.
+pub fn robust_bounds(positions: &[Vec3]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::ZERO;
+    let mut hi = Vec3::ZERO;
+    for a in 0..3 {
+        let mut v: Vec<f32> = positions
+            .iter()
+            .map(|p| p[a])
+            .filter(|x| x.is_finite())
+            .collect();
+        if v.is_empty() {
+            continue;
+        }
+        v.sort_by(f32::total_cmp);
+        let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+        lo[a] = at(0.01);
+        hi[a] = at(0.99);
+    }
+    (lo, hi)
+}
+
+/// (share of the heights in the highest 5% of their range) − (share in the lowest 5%).
+fn seen_top_score(core: &[Vec3], up: Vec3) -> f32 {
+    if core.is_empty() {
+        return 0.0;
+    }
+    let (lo, hi) = core
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), p| {
+            let z = p.dot(up);
+            (l.min(z), h.max(z))
+        });
+    let band = 0.05 * (hi - lo);
+    let bottom = core.iter().filter(|p| p.dot(up) <= lo + band).count();
+    let top = core.iter().filter(|p| p.dot(up) >= hi - band).count();
+    (top as f32 - bottom as f32) / core.len() as f32
+}
+
+/// Up from a support plane, else from a seen top, else the convention.
+fn estimate_up(core: &[Vec3], diagonal: f32, scores: &[f32; 6]) -> (Vec3, UpEvidence) {
+    if let Some((normal, _, share)) = support_plane(core, diagonal) {
+        return (snap_to_axis(normal), UpEvidence::SupportPlane { share });
+    }
+    let mut order: Vec<usize> = (0..6).collect();
+    order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]));
+    let (best, next) = (order[0], order[1]);
+    // A top layer that stands out from the other directions' (a margin of 2% of the
+    // Gaussians), and holds at least 2% more than the bottom layer.
+    if scores[best] >= 0.02 && scores[best] - scores[next] >= 0.02 {
+        return (
+            axis_vector(AXES[best]).unwrap_or(Vec3::Z),
+            UpEvidence::SeenTop {
+                score: scores[best],
+                runner_up: scores[next],
+            },
+        );
+    }
+    (-Vec3::Y, UpEvidence::Convention)
+}
+
+/// An axis when `v` is within 10° of one, else `v`.
+fn snap_to_axis(v: Vec3) -> Vec3 {
+    AXES.iter()
+        .filter_map(|a| axis_vector(a))
+        .find(|a| a.dot(v) > 10f32.to_radians().cos())
+        .unwrap_or(v)
+}
+
+/// The dominant plane of the core by RANSAC (fixed seed: the same answer every run), as
+/// (unit normal pointing to the side holding the other Gaussians, offset along it, share
+/// of inliers), when it is a support: at least 15% of the core within 0.5% of the
+/// diagonal of it, and at least 90% of the rest on one side.
+fn support_plane(core: &[Vec3], diagonal: f32) -> Option<(Vec3, f32, f32)> {
+    if core.len() < 100 {
+        return None;
+    }
+    let tol = 0.005 * diagonal;
+    let mut rng = SplitMix64::new(0x5eed_b1a7);
+    let step = (core.len() / 4096).max(1);
+    let sample: Vec<Vec3> = core.iter().step_by(step).copied().collect();
+    let pick = |rng: &mut SplitMix64| sample[(rng.next_u64() % sample.len() as u64) as usize];
+    let mut best: Option<(Vec3, f32, usize)> = None;
+    for _ in 0..256 {
+        let (a, b, c) = (pick(&mut rng), pick(&mut rng), pick(&mut rng));
+        let Some(normal) = (b - a).cross(c - a).try_normalize() else {
+            continue;
+        };
+        let offset = normal.dot(a);
+        let inliers = sample
+            .iter()
+            .filter(|p| (p.dot(normal) - offset).abs() <= tol)
+            .count();
+        if best.is_none_or(|(_, _, k)| inliers > k) {
+            best = Some((normal, offset, inliers));
+        }
+    }
+    let (normal, offset, inliers) = best?;
+    let share = inliers as f32 / sample.len() as f32;
+    let (above, below) = sample.iter().fold((0usize, 0usize), |(a, b), p| {
+        let d = p.dot(normal) - offset;
+        if d > tol {
+            (a + 1, b)
+        } else if d < -tol {
+            (a, b + 1)
+        } else {
+            (a, b)
+        }
+    });
+    let rest = (above + below).max(1) as f32;
+    if share < 0.15 || (above.max(below) as f32) < 0.9 * rest {
+        return None;
+    }
+    Some(if above >= below {
+        (normal, offset, share)
+    } else {
+        (-normal, -offset, share)
+    })
+}
+
+impl std::fmt::Display for Inspection {
+    /// The report `splatter inspect` prints.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = |v: Vec3| format!("[{:.4}, {:.4}, {:.4}]", v.x, v.y, v.z);
+        writeln!(
+            f,
+            "Gaussians:     {} (SH degree {})",
+            self.count, self.sh_degree
+        )?;
+        writeln!(
+            f,
+            "bounds:        {} .. {}",
+            v(self.bounds.0),
+            v(self.bounds.1)
+        )?;
+        writeln!(
+            f,
+            "robust bounds: {} .. {} (1st-99th percentile per axis)",
+            v(self.robust.0),
+            v(self.robust.1)
+        )?;
+        writeln!(
+            f,
+            "floaters:      {} ({:.2}%) beyond the robust box grown by a quarter",
+            self.floaters,
+            100.0 * self.floaters as f64 / self.count.max(1) as f64
+        )?;
+        writeln!(
+            f,
+            "opacity:       median {:.3}, 1st-99th percentile {:.3} .. {:.3}",
+            self.opacity.median, self.opacity.p1, self.opacity.p99
+        )?;
+        writeln!(
+            f,
+            "scale:         largest axis median {:.3e}, 1st-99th percentile {:.3e} .. {:.3e}",
+            self.scale.median, self.scale.p1, self.scale.p99
+        )?;
+        let up = axis_name(self.up).map_or_else(|| v(self.up), |a| format!("\"{a}\""));
+        let how = match &self.evidence {
+            UpEvidence::SupportPlane { share } => format!(
+                "the normal of a support plane holding {:.0}% of the core",
+                100.0 * share
+            ),
+            UpEvidence::SeenTop { score, runner_up } => format!(
+                "a seen top: {:+.3} (next best direction {:+.3})",
+                score, runner_up
+            ),
+            UpEvidence::Convention => {
+                "no support plane and no seen top decided; the camera convention's -y".into()
+            }
+        };
+        writeln!(f, "up:            {up}, from {how}")?;
+        let scores: Vec<String> = AXES
+            .iter()
+            .zip(self.axis_scores)
+            .map(|(a, s)| format!("{a} {s:+.3}"))
+            .collect();
+        writeln!(f, "               seen-top scores: {}", scores.join(", "))?;
+        writeln!(
+            f,
+            "support:       at height {:.4} along up ({})",
+            self.support,
+            match self.evidence {
+                UpEvidence::SupportPlane { .. } => "the support plane",
+                _ => "the lowest dense layer: 1st percentile of the heights",
+            }
+        )?;
+        let t = self.placement(0.0);
+        let (lo, hi) = self.upright_robust_bounds();
+        let size = hi - lo;
+        writeln!(
+            f,
+            "upright size:  {:.4} × {:.4} × {:.4} (robust, after the up rotation)",
+            size.x, size.y, size.z
+        )?;
+        write!(
+            f,
+            "transform:     {{\"up\": {up}, \"translate\": [{:.4}, {:.4}, {:.4}]}} stands it on z = 0, centred on the z axis",
+            t.x, t.y, t.z
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axis_names_round_trip_and_upright_turns_up_to_z() {
+        for a in AXES {
+            let v = axis_vector(a).unwrap();
+            assert_eq!(axis_name(v), Some(a));
+            assert!((upright_rotation(v) * v).distance(Vec3::Z) < 1e-6, "{a}");
+        }
+        assert_eq!(axis_vector("y"), Some(Vec3::Y));
+        assert_eq!(axis_vector("w"), None);
+        let tilted = Vec3::new(0.3, -0.8, 0.2).normalize();
+        assert!((upright_rotation(tilted) * tilted).distance(Vec3::Z) < 1e-5);
+    }
+}
