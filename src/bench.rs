@@ -367,6 +367,7 @@ impl SimCase {
             boundaries: Boundaries {
                 walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
                 colliders: vec![],
+                surface: None,
             },
             transfer: Transfer::Apic,
         };

@@ -149,3 +149,140 @@ fn quick_look_is_upright_and_framed() {
         }
     }
 }
+
+/// The scene of the drop tests: the plant, stood upright by `up: auto` and lifted so its
+/// support is at z = `lift`, above a 10 cm slab whose top is z = 0.1 and which is declared a
+/// collider (or not, to see that the collider is what stops it: the ground is then the
+/// domain's floor at z = −0.2).
+fn drop_scene(collider: bool) -> String {
+    let (cloud, _) = read_splats(&data(PLANT)).unwrap();
+    let found = inspect(&cloud);
+    let lift = 0.16;
+    let t = found.placement(lift);
+    let collider = if collider {
+        r#", "collider": { "kind": "separate", "friction": 0.8 }"#
+    } else {
+        ""
+    };
+    format!(
+        r#"{{
+  "output": {{ "width": 32, "height": 24, "frames": 1 }},
+  "camera": {{ "fov_y_deg": 40, "path": {{ "type": "orbit", "target": [0, 0, 0.4], "radius": 3 }} }},
+  "simulation": {{
+    "dx": 0.04, "domain": {{ "lo": [-0.4, -0.4, -0.2], "hi": [0.4, 0.4, 1.2] }},
+    "walls": {{ "kind": "separate" }}, "ground": {{ "kind": "separate", "friction": 0.8 }}
+  }},
+  "objects": [
+    {{ "name": "slab",
+       "procedural": {{ "shape": "box", "size": [0.7, 0.7, 0.1], "spacing": 0.01, "color": [0.5, 0.5, 0.5] }},
+       "transform": {{ "translate": [0, 0, 0.05] }}{collider} }},
+    {{ "name": "plant", "ply": "{ply}",
+       "transform": {{ "up": "auto", "translate": [{x}, {y}, {z}] }},
+       "physics": {{ "material": {{ "model": "neo_hookean", "E": 1000000, "nu": 0.3, "density": 400 }} }} }}
+  ]
+}}"#,
+        ply = data(PLANT).display(),
+        x = t.x,
+        y = t.y,
+        z = t.z,
+    )
+}
+
+/// Simulate `seconds` and return the particles' positions, and the setup.
+fn drop(
+    collider: bool,
+    seconds: f64,
+) -> (
+    Vec<glam::DVec3>,
+    splatter::scene::simulation::SimulationSetup,
+) {
+    use splatter::gpu::GpuContext;
+    use splatter::sim::gpu::GpuSim;
+    let scene = splatter::scene::parse(&drop_scene(collider), "drop.json", Path::new("/")).unwrap();
+    let (splats, report) = scene.build_splats().unwrap();
+    let setup = splatter::scene::simulation::prepare(&scene, splats, &report)
+        .unwrap()
+        .unwrap();
+    let gpu = GpuContext::new(None).unwrap();
+    let mut sim = GpuSim::new(
+        &gpu,
+        &setup.particles,
+        &setup.grid,
+        &setup.materials,
+        &setup.params,
+    )
+    .unwrap();
+    let steps = (seconds / setup.params.dt).ceil() as u32;
+    let mut done = 0;
+    while done < steps {
+        let k = (steps - done).min(100);
+        let frame = sim
+            .step_frame(&gpu, k, done as f64 * setup.params.dt)
+            .unwrap();
+        sim.fit_pool(&gpu, &frame.watchdog).unwrap();
+        done += k;
+    }
+    let out = sim.read_particles(&gpu, &setup.particles).unwrap();
+    (out.x, setup)
+}
+
+/// The plant, stood up by `up: auto`, dropped onto a slab declared a collider comes to rest
+/// on it: no particle more than Δx below the slab's top (z = 0.1), the pot's base on it, and
+/// the plant still upright (its height kept). Without `collider` the same plant falls
+/// through the slab to the floor, so the collider is what holds it.
+#[test]
+fn plant_dropped_on_a_captured_slab_rests_on_it() {
+    let (x, setup) = drop(true, 0.3);
+    let dx = setup.grid.dx;
+    let lowest = x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    println!(
+        "{} particles, dt {:.2e}: lowest z {lowest:.4} (slab top 0.1, Δx {dx})",
+        x.len(),
+        setup.params.dt
+    );
+    assert!(
+        lowest >= 0.1 - dx,
+        "a particle at z = {lowest} sank below the slab"
+    );
+    assert!(
+        lowest <= 0.1 + 1.5 * dx,
+        "the plant should have landed: lowest z = {lowest}"
+    );
+    // Upright: what started in the top half (the leaves) is still well above what
+    // started in the bottom half (the pot), and the plant has not slid or tipped sideways.
+    // (It sags: a jelly plant simulated from its surface Gaussians at Δx = 4 cm.)
+    let x0 = &setup.particles.x;
+    let mid = 0.5
+        * (x0.iter().map(|p| p.z).fold(f64::INFINITY, f64::min)
+            + x0.iter().map(|p| p.z).fold(f64::NEG_INFINITY, f64::max));
+    let mean = |pick: &dyn Fn(usize) -> bool| {
+        let v: Vec<glam::DVec3> = (0..x.len()).filter(|&i| pick(i)).map(|i| x[i]).collect();
+        v.iter().sum::<glam::DVec3>() / v.len() as f64
+    };
+    let (upper, lower) = (mean(&|i| x0[i].z > mid), mean(&|i| x0[i].z <= mid));
+    let c0 = x0.iter().sum::<glam::DVec3>() / x0.len() as f64;
+    let c1 = x.iter().sum::<glam::DVec3>() / x.len() as f64;
+    println!(
+        "upper half at z {:.3}, lower half at z {:.3}; centre moved {:.3} sideways",
+        upper.z,
+        lower.z,
+        (c1 - c0).truncate().length()
+    );
+    assert!(
+        upper.z - lower.z > 0.2,
+        "the plant should stand: {upper:?} over {lower:?}"
+    );
+    assert!(
+        (upper - lower).truncate().length() < 0.5 * (upper.z - lower.z),
+        "tipped: {upper:?} over {lower:?}"
+    );
+    assert!((c1 - c0).truncate().length() < 0.05, "slid sideways");
+
+    let (x, _) = drop(false, 0.2);
+    let lowest = x.iter().map(|p| p.z).fold(f64::INFINITY, f64::min);
+    println!("without the collider: lowest z {lowest:.4}");
+    assert!(
+        lowest < 0.1 - dx,
+        "without the collider the plant falls through: {lowest}"
+    );
+}

@@ -251,6 +251,7 @@ fn incline(theta_deg: f64, mu: f64, t_end: f64, ramp: f64, t_fit: f64) -> (f64, 
         Boundaries {
             walls: DomainWalls::uniform(Condition::SEPARATE),
             colliders: vec![collider],
+            surface: None,
         },
     );
     let com0 = p.center_of_mass();
@@ -355,6 +356,7 @@ fn nacc_sphere_hits_sticky_ground() {
         Boundaries {
             walls,
             colliders: vec![],
+            surface: None,
         },
     );
     let steps = 400;

@@ -223,6 +223,7 @@ fn jelly_cube_is_simulated_derived_and_rendered_on_the_gpu() {
         boundaries: Boundaries {
             walls: DomainWalls::uniform(Condition::SEPARATE),
             colliders: vec![],
+            surface: None,
         },
         transfer: Transfer::Apic,
     };

@@ -158,6 +158,7 @@ fn gpu_elastic_step_matches_the_cpu_reference() {
                     Boundaries {
                         walls: DomainWalls::default(),
                         colliders: vec![slope],
+                        surface: None,
                     },
                 ),
             };
@@ -221,6 +222,7 @@ fn gpu_nacc_step_matches_the_cpu_reference() {
                 Boundaries {
                     walls,
                     colliders: vec![],
+                    surface: None,
                 },
             ),
         };

@@ -20,6 +20,7 @@ fn params(dt: f64, gravity: DVec3, walls: DomainWalls) -> StepParams {
         boundaries: Boundaries {
             walls,
             colliders: vec![],
+            surface: None,
         },
         transfer: Transfer::Apic,
     }

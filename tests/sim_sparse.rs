@@ -32,6 +32,7 @@ fn fruit() -> (Particles, Grid, Vec<Material>, StepParams) {
         boundaries: Boundaries {
             walls,
             colliders: vec![],
+            surface: None,
         },
         transfer: Transfer::Apic,
     };

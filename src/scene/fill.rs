@@ -483,6 +483,40 @@ fn warnings(input: &FillInput, stats: &FillStats) -> Vec<String> {
     w
 }
 
+/// The solid a surface of Gaussians bounds, on the lattice of points `lo` + i·h (i < `n`):
+/// the points their density reaches (the band, as for filling), closed morphologically by
+/// `radius` lattice steps (a captured table top, an open floor). For colliders.
+pub(crate) fn solid_on_lattice(
+    means: &[Vec3],
+    covariances: &[Sym3],
+    opacities: &[f32],
+    lo: DVec3,
+    h: f64,
+    n: [usize; 3],
+    radius: usize,
+) -> Vec<bool> {
+    // Voxel centres lo' + (i + ½)h on the lattice points.
+    let grid = Voxels {
+        lo: lo - 0.5 * h,
+        h,
+        n,
+    };
+    let everywhere = |_: DVec3| true;
+    let input = FillInput {
+        means,
+        covariances,
+        opacities,
+        spacing: h,
+        inside: InsideTest::Closing { radius },
+        region: &everywhere,
+    };
+    let flags: Vec<AtomicU8> = (0..grid.len()).map(|_| AtomicU8::new(0)).collect();
+    mark_band(&input, &grid, &flags);
+    let band: Vec<bool> = flags.iter().map(|f| f.load(Relaxed) & BAND != 0).collect();
+    let interior = closed_interior(&grid, &band, radius);
+    band.iter().zip(interior).map(|(b, i)| *b || i).collect()
+}
+
 /// Mark the voxels each Gaussian's density reaches (BAND). Returns (degenerate, clipped).
 fn mark_band(input: &FillInput, grid: &Voxels, flags: &[AtomicU8]) -> (usize, usize) {
     let h = grid.h;

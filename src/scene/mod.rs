@@ -17,6 +17,7 @@ pub mod physics;
 pub mod quality;
 pub mod regions;
 pub mod simulation;
+pub mod surface;
 mod validate;
 
 pub use build::{BuildReport, ObjectReport};
@@ -322,6 +323,10 @@ pub struct ObjectSpec {
     /// Blinn-Phong weights under the scene's `lighting`. Default: the paper's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shading: Option<lighting::ShadingSpec>,
+    /// Stop what the simulation moves: this object's Gaussians (the static part, for a
+    /// simulated object) become a collider with this condition. Needs `simulation`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collider: Option<physics::ConditionSpec>,
 }
 
 /// x_world = R · U · diag(scale) · x_object + translate: U turns the object's `up` to +z,

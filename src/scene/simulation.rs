@@ -94,7 +94,7 @@ pub fn prepare(
         return Ok(None);
     }
     let grid = grid_of(spec, o)?;
-    let boundaries = boundaries_of(spec, o)?;
+    let mut boundaries = boundaries_of(spec, o)?;
     let ranges = object_ranges(report);
     let kinematic = super::kinematic::build(scene, &splats, |i| ranges[i].clone())?;
     let moving = select_moving(scene, &splats, &ranges, &simulated)?;
@@ -102,6 +102,7 @@ pub fn prepare(
     // Static first: whole static objects and what simulated objects leave static, in file
     // order; then per simulated object its selected Gaussians and its fill.
     let mut out = Parts::new(splats.sh_degree);
+    let mut surface = Parts::new(splats.sh_degree);
     for (i, range) in ranges.iter().enumerate() {
         let part = match &moving[i] {
             None => subset(&splats, range.clone()),
@@ -114,8 +115,12 @@ pub fn prepare(
                 gather(&splats, &rest)
             }
         };
+        if scene.objects[i].collider.is_some() {
+            surface.push(part.clone(), i, PartKind::Static);
+        }
         out.push(part, i, PartKind::Static);
     }
+    boundaries.surface = surface_of(scene, &surface.splats, &grid)?;
     let static_count = out.splats.len();
     let mut body = Bodies::default();
     for &i in &simulated {
@@ -141,6 +146,44 @@ pub fn prepare(
         kinematic,
         warnings: body.warnings,
     }))
+}
+
+/// The captured-surface collider of the objects that declare `collider` (their static
+/// Gaussians `splats`), None when none does. They share one condition.
+fn surface_of(
+    scene: &Scene,
+    splats: &Splats,
+    grid: &Grid,
+) -> Result<Option<crate::sim::boundary::SurfaceCollider>, SceneError> {
+    let o = scene.origin.as_str();
+    let mut condition = None;
+    for (i, obj) in scene.objects.iter().enumerate() {
+        let Some(spec) = &obj.collider else { continue };
+        let c = spec.build(o, &format!("objects[{i}].collider"))?;
+        match condition {
+            Some((_, first)) if first != c => {
+                return Err(SceneError::invalid(
+                    o,
+                    format!("objects[{i}].collider"),
+                    format!("{:?} with friction {}", c.kind, c.friction),
+                    "the same condition as every other collider object (they form one surface)",
+                ))
+            }
+            _ => condition = Some((i, c)),
+        }
+    }
+    let Some((i, condition)) = condition else {
+        return Ok(None);
+    };
+    if splats.is_empty() {
+        return Err(SceneError::invalid(
+            o,
+            format!("objects[{i}].collider"),
+            "set",
+            "an object with static Gaussians to stand for the surface (a simulated object's collider is its unselected part)",
+        ));
+    }
+    Ok(Some(super::surface::build(splats, grid, condition)))
 }
 
 /// The grid over `simulation.domain` at `simulation.dx`, validated.
@@ -201,7 +244,11 @@ fn boundaries_of(spec: &SimulationSpec, o: &str) -> Result<Boundaries, SceneErro
                 .build(o, &format!("simulation.colliders[{i}]"))?,
         });
     }
-    Ok(Boundaries { walls, colliders })
+    Ok(Boundaries {
+        walls,
+        colliders,
+        surface: None,
+    })
 }
 
 /// Each object's run in the built Gaussians (file order).

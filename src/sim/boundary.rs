@@ -35,6 +35,13 @@
 //!
 //! **Moving colliders** (`sim::kinematic`, [`step_at`]): rigid shapes on a prescribed path,
 //! applied after the planar colliders in the collider's frame (relative velocity).
+//!
+//! **A surface collider** ([`SurfaceCollider`]): a static captured surface (a table, the
+//! floor) as a signed distance φ sampled at every grid node (negative inside,
+//! `scene::surface` builds it from the Gaussians' density). A node with φ ≤ 0 gets its
+//! condition, with the outward normal ∇φ/|∇φ| from central differences of the nodes
+//! around it (one-sided at the grid's faces); where ∇φ vanishes (deep inside) the node is
+//! held (v = 0). Applied after the moving colliders, before the walls.
 
 use glam::DVec3;
 
@@ -149,9 +156,45 @@ pub struct PlaneCollider {
     pub condition: Condition,
 }
 
+/// A static surface as a signed distance at the grid nodes (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceCollider {
+    /// φ at node (i, j, k), index i + nx (j + ny k) over the grid's nodes; scene units.
+    pub phi: Vec<f32>,
+    pub condition: Condition,
+}
+
+impl SurfaceCollider {
+    /// φ at node `i` of a grid with `nodes` nodes per axis, clamped to the grid.
+    pub fn phi_at(&self, nodes: [u32; 3], i: [i64; 3]) -> f32 {
+        let c = |a: usize| i[a].clamp(0, i64::from(nodes[a]) - 1) as usize;
+        let (nx, ny) = (nodes[0] as usize, nodes[1] as usize);
+        self.phi[c(0) + nx * (c(1) + ny * c(2))]
+    }
+
+    /// The velocity of node `i` after the condition (unchanged outside).
+    pub fn apply(&self, nodes: [u32; 3], i: [u32; 3], v: DVec3) -> DVec3 {
+        let at = |d: [i64; 3]| self.phi_at(nodes, [0, 1, 2].map(|a| i64::from(i[a]) + d[a]));
+        if at([0, 0, 0]) > 0.0 {
+            return v;
+        }
+        let g = DVec3::new(
+            f64::from(at([1, 0, 0]) - at([-1, 0, 0])),
+            f64::from(at([0, 1, 0]) - at([0, -1, 0])),
+            f64::from(at([0, 0, 1]) - at([0, 0, -1])),
+        );
+        match g.try_normalize() {
+            Some(n) => self.condition.apply(v, n),
+            None => DVec3::ZERO,
+        }
+    }
+}
+
 /// Every boundary of a step.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Boundaries {
     pub walls: DomainWalls,
     pub colliders: Vec<PlaneCollider>,
+    /// A captured static surface, if the scene declares one.
+    pub surface: Option<SurfaceCollider>,
 }

@@ -216,6 +216,9 @@ pub fn grid_update_at(
             for (k, pose) in kinematic.iter().zip(&poses) {
                 v = k.apply(pose, x, v);
             }
+            if let Some(s) = &boundaries.surface {
+                v = s.apply(nodes.to_array(), i.to_array(), v);
+            }
             for axis in 0..3 {
                 let e = DVec3::AXES[axis];
                 if i[axis] < band {
@@ -510,6 +513,7 @@ mod tests {
                 boundaries: Boundaries {
                     walls: DomainWalls::uniform(cond),
                     colliders: vec![],
+                    surface: None,
                 },
                 transfer: Transfer::Apic,
             };

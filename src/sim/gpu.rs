@@ -232,6 +232,10 @@ impl GpuSim {
             grid: zeroed(gpu, "sim grid pool", pool_bytes(pool)),
             block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
             block_slot: zeroed(gpu, "sim block slots", u64::from(blocks) * 4),
+            surface: match &params.boundaries.surface {
+                Some(s) => init(gpu, "sim surface phi", &s.phi, false),
+                None => init(gpu, "sim surface phi", &[0.0f32], false),
+            },
             active_blocks: zeroed(gpu, "sim active blocks", u64::from(pool) * 4),
             block_args: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("sim block dispatch"),

@@ -280,6 +280,7 @@ fn run_one(sweep: &str, value: f64, name: &str, variant: Case3Variant, quick: bo
         boundaries: Boundaries {
             walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
             colliders: vec![],
+            surface: None,
         },
         transfer: Transfer::Apic,
     };

@@ -164,7 +164,11 @@ fn params(dt: f64, walls: DomainWalls, colliders: Vec<PlaneCollider>) -> StepPar
     StepParams {
         dt,
         gravity: DVec3::ZERO,
-        boundaries: Boundaries { walls, colliders },
+        boundaries: Boundaries {
+            walls,
+            colliders,
+            surface: None,
+        },
         transfer: Transfer::Apic,
     }
 }
@@ -416,6 +420,7 @@ fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
         boundaries: Boundaries {
             walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
             colliders: vec![],
+            surface: None,
         },
         transfer: Transfer::Apic,
     };

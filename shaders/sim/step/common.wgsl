@@ -55,6 +55,16 @@ struct KinematicPose {
     angular_velocity: vec4<f32>,
 }
 
+// The captured surface collider (src/sim/boundary.rs, SurfaceCollider): `on` when the
+// buffer `surface` holds φ at every node.
+struct SurfaceCondition {
+    on: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    condition: Condition,
+}
+
 struct SimStep {
     // node i sits at lo + i·dx
     lo: vec3<f32>,
@@ -73,6 +83,7 @@ struct SimStep {
     num_kinematic: u32,
     // blocks the grid pool holds (sparse grid: common.wgsl, node_index)
     pool_blocks: u32,
+    surface: SurfaceCondition,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
     colliders: array<Collider, MAX_COLLIDERS>,

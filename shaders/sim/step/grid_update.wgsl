@@ -1,7 +1,7 @@
 // Grid update (docs/method.md §2 step 2), as functions called by the P2G gather right after a node's
 // mass and momentum are summed (one pass over the nodes instead of two): v_i = p_i / m_i
 // where m_i > 0, v_i += Δt g, then the planar colliders, the moving (kinematic) colliders at
-// this substep's pose and the domain walls (nodes within `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
+// this substep's pose, the captured surface and the domain walls (nodes within `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
 // — never v = 0 (docs/method.md §2). Mirrors `cpu::grid_update` and `cpu::Condition::apply`.
 
 fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
@@ -94,6 +94,34 @@ fn apply_kinematic(k: u32, x: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
     return vc + apply_condition(c.condition, v - vc, pose.rotation * sd.n);
 }
 
+// φ of the captured surface at every node (a single 0 when there is none); only the passes
+// that update the grid use it.
+@group(0) @binding(14) var<storage, read> surface: array<f32>;
+
+// φ at node i + d, clamped to the grid (mirrors `SurfaceCollider::phi_at`).
+fn surface_phi(i: vec3<u32>, d: vec3<i32>) -> f32 {
+    let c = vec3<u32>(clamp(vec3<i32>(i) + d, vec3<i32>(0), vec3<i32>(step.nodes) - 1));
+    return surface[c.x + step.nodes.x * (c.y + step.nodes.y * c.z)];
+}
+
+// The surface collider on node i (mirrors `SurfaceCollider::apply`): inside (φ ≤ 0) the
+// condition with the normal ∇φ/|∇φ|, held where the gradient vanishes.
+fn apply_surface(i: vec3<u32>, v: vec3<f32>) -> vec3<f32> {
+    if surface_phi(i, vec3<i32>(0)) > 0.0 {
+        return v;
+    }
+    let g = vec3<f32>(
+        surface_phi(i, vec3<i32>(1, 0, 0)) - surface_phi(i, vec3<i32>(-1, 0, 0)),
+        surface_phi(i, vec3<i32>(0, 1, 0)) - surface_phi(i, vec3<i32>(0, -1, 0)),
+        surface_phi(i, vec3<i32>(0, 0, 1)) - surface_phi(i, vec3<i32>(0, 0, -1)),
+    );
+    let len = length(g);
+    if len <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    return apply_condition(step.surface.condition, v, g / len);
+}
+
 // Velocity of node i from its momentum and mass (0 where there is no mass).
 fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
@@ -109,6 +137,9 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     }
     for (var k = 0u; k < step.num_kinematic; k++) {
         v = apply_kinematic(k, x, v);
+    }
+    if step.surface.on != 0u {
+        v = apply_surface(i, v);
     }
     for (var axis = 0u; axis < 3u; axis++) {
         var e = vec3<f32>(0.0);

@@ -26,6 +26,7 @@ impl GridFromSums {
                 ("active_blocks", &b.active_blocks),
                 ("block_args", &b.block_args),
                 ("block_slot", &b.block_slot),
+                ("surface", &b.surface),
             ],
         )
     }

@@ -112,6 +112,15 @@ impl GpuPose {
     }
 }
 
+/// `SurfaceCondition` of `shaders/sim/step/common.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuSurface {
+    pub on: u32,
+    pub _pad: [u32; 3],
+    pub condition: GpuCondition,
+}
+
 /// `SimStep` of `shaders/sim/step/common.wgsl`: everything constant over a step.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
@@ -129,6 +138,7 @@ pub struct GpuStep {
     pub num_kinematic: u32,
     /// Blocks the grid pool holds (set by `GpuSim`).
     pub pool_blocks: u32,
+    pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
     pub materials: [GpuMaterial; MAX_MATERIALS],
@@ -211,6 +221,14 @@ impl GpuStep {
             apic: u32::from(params.transfer == Transfer::Apic),
             num_kinematic: 0,
             pool_blocks: 0,
+            surface: match &params.boundaries.surface {
+                Some(s) => GpuSurface {
+                    on: 1,
+                    _pad: [0; 3],
+                    condition: GpuCondition::from_cpu(&s.condition),
+                },
+                None => GpuSurface::default(),
+            },
             walls: params
                 .boundaries
                 .walls
@@ -251,6 +269,7 @@ mod tests {
             [elastic, plastic, mu, lambda, kappa, nacc]
         );
         assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
+        assert_layout!(&src, GpuSurface, "SurfaceCondition", [on, condition]);
         assert_layout!(&src, GpuCollider, "Collider", [point, normal, condition]);
         assert_layout!(
             &src,
@@ -269,6 +288,7 @@ mod tests {
                 apic,
                 num_kinematic,
                 pool_blocks,
+                surface,
                 walls,
                 colliders,
                 materials,

@@ -85,6 +85,8 @@ pub(crate) struct StepBuffers {
     pub block_flags: wgpu::Buffer,
     /// Block → pool slot, one u32 per block of the domain.
     pub block_slot: wgpu::Buffer,
+    /// φ of the captured surface at every node (one 0 when there is none).
+    pub surface: wgpu::Buffer,
     pub active_blocks: wgpu::Buffer,
     pub block_args: wgpu::Buffer,
     pub flags: wgpu::Buffer,

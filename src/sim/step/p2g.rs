@@ -32,6 +32,7 @@ impl P2gGather {
                 ("active_blocks", &b.active_blocks),
                 ("block_args", &b.block_args),
                 ("block_slot", &b.block_slot),
+                ("surface", &b.surface),
             ],
         )
     }
