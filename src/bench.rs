@@ -15,51 +15,96 @@ use crate::rng::SplitMix64;
 /// `n` Gaussians of SH degree `degree` filling a ball of radius 1, sized like a trained
 /// capture of that density (scale ≈ the mean spacing), random orientations and colours.
 pub fn synthetic_splats(n: usize, degree: u32, seed: u64) -> Splats {
-    let mut rng = SplitMix64::new(seed);
-    let k = crate::splat::sh_coeff_count(degree) * 3;
-    let spacing = (4.19 / n.max(1) as f32).cbrt();
-    let mut s = Splats {
-        sh_degree: degree,
-        ..Default::default()
-    };
-    s.means.reserve(n);
-    s.covariances.reserve(n);
-    s.sh.reserve(n * k);
-    while s.means.len() < n {
-        let p = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
-        if p.length_squared() > 1.0 {
-            continue;
-        }
-        let q = Quat::from_xyzw(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-        .normalize();
-        let scale = Vec3::new(
-            rng.range(0.3, 1.2),
-            rng.range(0.3, 1.2),
-            rng.range(0.1, 0.6),
-        ) * spacing;
-        let m = Mat3::from_quat(q) * Mat3::from_diagonal(scale);
-        s.means.push(p);
-        s.covariances.push(sym3_from_mat3(m * m.transpose()));
-        s.rotations.push(Quat::IDENTITY);
-        s.opacities.push(rng.range(0.2, 1.0));
-        for j in 0..k {
-            s.sh.push(if j < 3 {
-                rng.range(-1.5, 1.5)
-            } else {
-                rng.range(-0.2, 0.2)
-            });
+    Synthetic::capture_like(n, degree, seed).build()
+}
+
+/// A synthetic scene of random Gaussians: the one generator the benchmarks, the suite and
+/// the renderer's tests share.
+#[derive(Clone, Copy, Debug)]
+pub struct Synthetic {
+    pub n: usize,
+    pub degree: u32,
+    pub seed: u64,
+    /// Means in the unit ball (else the cube [−1, 1]³).
+    pub ball: bool,
+    /// Standard deviations drawn from this range per axis (else capture-like: about the
+    /// mean spacing, one axis flatter).
+    pub scale: Option<(f32, f32)>,
+    /// Random rest frames (SH are then evaluated in a rotated frame), else identity.
+    pub random_frames: bool,
+    /// Opacities from this value to 1.
+    pub min_opacity: f32,
+    /// Amplitude of the rest SH coefficients (the DC term's is 1.5).
+    pub rest_sh: f32,
+}
+
+impl Synthetic {
+    /// What a trained capture of `n` Gaussians in a unit ball looks like.
+    pub fn capture_like(n: usize, degree: u32, seed: u64) -> Synthetic {
+        Synthetic {
+            n,
+            degree,
+            seed,
+            ball: true,
+            scale: None,
+            random_frames: false,
+            min_opacity: 0.2,
+            rest_sh: 0.2,
         }
     }
-    s
+
+    pub fn build(&self) -> Splats {
+        let mut rng = SplitMix64::new(self.seed);
+        let k = crate::splat::sh_coeff_count(self.degree) * 3;
+        let spacing = (4.19 / self.n.max(1) as f32).cbrt();
+        let mut s = Splats {
+            sh_degree: self.degree,
+            ..Default::default()
+        };
+        s.means.reserve(self.n);
+        s.covariances.reserve(self.n);
+        s.sh.reserve(self.n * k);
+        let unit = |rng: &mut SplitMix64| rng.range(-1.0, 1.0);
+        while s.means.len() < self.n {
+            let p = Vec3::new(unit(&mut rng), unit(&mut rng), unit(&mut rng));
+            if self.ball && p.length_squared() > 1.0 {
+                continue;
+            }
+            let q = Quat::from_xyzw(
+                unit(&mut rng),
+                unit(&mut rng),
+                unit(&mut rng),
+                unit(&mut rng),
+            )
+            .normalize();
+            let scale = match self.scale {
+                Some((lo, hi)) => {
+                    Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))
+                }
+                None => {
+                    Vec3::new(
+                        rng.range(0.3, 1.2),
+                        rng.range(0.3, 1.2),
+                        rng.range(0.1, 0.6),
+                    ) * spacing
+                }
+            };
+            let m = Mat3::from_quat(q) * Mat3::from_diagonal(scale);
+            s.means.push(p);
+            s.covariances.push(sym3_from_mat3(m * m.transpose()));
+            s.rotations.push(if self.random_frames {
+                Quat::from_xyzw(unit(&mut rng), unit(&mut rng), unit(&mut rng), 1.0).normalize()
+            } else {
+                Quat::IDENTITY
+            });
+            s.opacities.push(rng.range(self.min_opacity, 1.0));
+            for j in 0..k {
+                let amp = if j < 3 { 1.5 } else { self.rest_sh };
+                s.sh.push(rng.range(-amp, amp));
+            }
+        }
+        s
+    }
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -427,4 +472,49 @@ pub fn time_sim(
         gpu_bytes: sim.gpu_bytes(),
     };
     Ok((sim, timing))
+}
+
+/// `splatter bench read`: the median wall time of [`crate::splat::formats::read_splats`]
+/// per file, with the rate in Gaussians per second.
+pub fn read_bench(files: &[std::path::PathBuf], repeat: usize, out: &mut dyn Write) -> Result<()> {
+    writeln!(out, "threads: {}", rayon::current_num_threads())?;
+    writeln!(
+        out,
+        "| file | format | Gaussians | size (MB) | read (s, median of {repeat}) | M Gaussians/s |"
+    )?;
+    writeln!(out, "|---|---|---:|---:|---:|---:|")?;
+    for file in files {
+        let size = dir_or_file_size(file);
+        let mut times = Vec::with_capacity(repeat);
+        let mut last = None;
+        for _ in 0..repeat {
+            let t = Instant::now();
+            let (cloud, report) = crate::splat::formats::read_splats(file)?;
+            times.push(t.elapsed().as_secs_f64());
+            last = Some((cloud.len(), report));
+        }
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        let (n, report) = last.expect("repeat ≥ 1");
+        writeln!(
+            out,
+            "| {} | {} {} | {n} | {:.1} | {median:.3} | {:.2} |",
+            file.display(),
+            report.format,
+            report.variant,
+            size as f64 / 1e6,
+            n as f64 / median / 1e6
+        )?;
+    }
+    Ok(())
+}
+
+fn dir_or_file_size(path: &std::path::Path) -> u64 {
+    match std::fs::read_dir(path) {
+        Ok(entries) => entries
+            .filter_map(|e| e.ok()?.metadata().ok())
+            .map(|m| m.len())
+            .sum(),
+        Err(_) => std::fs::metadata(path).map_or(0, |m| m.len()),
+    }
 }

@@ -80,6 +80,16 @@ pub(crate) enum BenchWhat {
         #[arg(long)]
         per_pass: bool,
     },
+    /// Seconds to read splat files of any format (the file is read from the page cache:
+    /// decoding, not the disk, is measured).
+    Read {
+        /// The files (or SOG folders).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Repetitions per file (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        repeat: usize,
+    },
     /// The sim, render and end-to-end benchmarks in one run: seconds per frame of each
     /// paper example under scenes/ next to the paper's column (docs/method.md §9), written to
     /// OUT/data/bench_suite.{json,md} (docs/performance.md).

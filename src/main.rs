@@ -86,6 +86,9 @@ fn run(cli: Cli) -> Result<()> {
             what: BenchWhat::Suite(args),
         }) => bench_suite(cli.backend, &args),
         Some(Command::Bench {
+            what: BenchWhat::Read { files, repeat },
+        }) => splatter::bench::read_bench(&files, repeat.max(1), &mut std::io::stdout()),
+        Some(Command::Bench {
             what:
                 BenchWhat::Accuracy {
                     out,

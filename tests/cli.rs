@@ -1066,3 +1066,79 @@ fn export_ply_and_spz_write_a_cloud_per_frame() {
     );
     assert!(size("spzs", "frame_00001.spz") * 5 < size("plys", "frame_00001.ply"));
 }
+
+/// Damaged and unsupported splat files (the messages docs/formats.md quotes): one `error:`
+/// line each, naming the file, the format
+/// it looks like and what is wrong (`inspect` reads them as `render --ply` and scenes do).
+#[test]
+fn damaged_splat_files_get_one_error_line_each() {
+    let dir = workdir();
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/formats");
+    let read = |name: &str| std::fs::read(fixtures.join(name)).unwrap();
+    let put = |name: &str, bytes: &[u8]| std::fs::write(dir.path().join(name), bytes).unwrap();
+
+    // A truncated SPZ (the gzip stream cut in the middle of its data).
+    let v3 = read("donut_4k.v3.spz");
+    put("truncated.spz", &v3[..v3.len() / 2]);
+    // A corrupt gzip stream: bytes of the deflate data overwritten.
+    let mut corrupt = v3.clone();
+    for b in &mut corrupt[40..80] {
+        *b = 0xff;
+    }
+    put("corrupt.spz", &corrupt);
+    // An unknown SPZ version: a version-4 header saying 7.
+    let mut v7 = read("donut_4k.v4.spz");
+    v7[4] = 7;
+    put("version7.spz", &v7);
+    // A .splat whose size is not a multiple of 32 bytes.
+    let splat = read("donut_4k.splat");
+    put("odd.splat", &splat[..1000]);
+    // A SOG folder with an image missing.
+    let sog = dir.path().join("missing_sog");
+    std::fs::create_dir(&sog).unwrap();
+    for f in [
+        "meta.json",
+        "means_l.webp",
+        "quats.webp",
+        "scales.webp",
+        "sh0.webp",
+    ] {
+        std::fs::copy(fixtures.join("donut_4k_sog").join(f), sog.join(f)).unwrap();
+    }
+    // A compressed.ply whose chunk count does not match its vertices.
+    let cply = read("donut_4k.compressed.ply");
+    let text = String::from_utf8_lossy(&cply[..600]).into_owned();
+    let at = text.find("element chunk 17").unwrap();
+    let mut bad = cply.clone();
+    bad[at..at + 16].copy_from_slice(b"element chunk 16");
+    put("chunks.compressed.ply", &bad);
+
+    for (file, needles) in [
+        (
+            "truncated.spz",
+            &["truncated.spz", "SPZ", "gzip stream"][..],
+        ),
+        (
+            "corrupt.spz",
+            &["corrupt.spz", "damaged SPZ", "gzip stream"][..],
+        ),
+        (
+            "version7.spz",
+            &["version7.spz", "SPZ version 7", "versions 1 to 4"][..],
+        ),
+        ("odd.splat", &["odd.splat", ".splat", "32-byte records"][..]),
+        ("missing_sog", &["missing_sog", "SOG", "means_u.webp"][..]),
+        (
+            "chunks.compressed.ply",
+            &[
+                "chunks.compressed.ply",
+                "compressed PLY",
+                "16 chunks for 4148 vertices",
+            ][..],
+        ),
+    ] {
+        let line = expect_error(&splatter(dir.path(), &["inspect", file]));
+        println!("{line}");
+        assert_mentions(&line, needles);
+    }
+}

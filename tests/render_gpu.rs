@@ -8,58 +8,24 @@ use splatter::gpu::GpuContext;
 use splatter::render::cpu;
 use splatter::render::splats::sym3_from_mat3;
 use splatter::render::{Camera, GpuRenderer, Splats};
-use splatter::rng::SplitMix64;
 use splatter::splat::sh;
 
 fn gpus() -> Vec<GpuContext> {
     splatter::gpu::test_contexts()
 }
 
-/// `n` random anisotropic Gaussians in a unit-ish cube, random rotations and SH.
+/// `n` random anisotropic Gaussians in the cube [−1, 1]³, random rotations, rest frames
+/// and SH (the library's shared synthetic scene).
 fn random_splats(n: usize, degree: u32, seed: u64) -> Splats {
-    let mut rng = SplitMix64::new(seed);
-    let k = splatter::splat::sh_coeff_count(degree) * 3;
-    let mut s = Splats {
-        sh_degree: degree,
-        ..Default::default()
-    };
-    for _ in 0..n {
-        let mean = Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        );
-        let q = Quat::from_xyzw(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-        .normalize();
-        let scale = Vec3::new(
-            rng.range(0.005, 0.08),
-            rng.range(0.005, 0.08),
-            rng.range(0.005, 0.08),
-        );
-        let m = Mat3::from_quat(q) * Mat3::from_diagonal(scale);
-        s.means.push(mean);
-        s.covariances.push(sym3_from_mat3(m * m.transpose()));
-        // The rest frame rotation is random too, so SH are evaluated in a rotated frame.
-        let r = Quat::from_xyzw(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            1.0,
-        )
-        .normalize();
-        s.rotations.push(r);
-        s.opacities.push(rng.range(0.05, 1.0));
-        for j in 0..k {
-            let amp = if j < 3 { 1.5 } else { 0.4 };
-            s.sh.push(rng.range(-amp, amp));
-        }
+    splatter::bench::Synthetic {
+        ball: false,
+        scale: Some((0.005, 0.08)),
+        random_frames: true,
+        min_opacity: 0.05,
+        rest_sh: 0.4,
+        ..splatter::bench::Synthetic::capture_like(n, degree, seed)
     }
-    s
+    .build()
 }
 
 /// SH as the GPU sees them (f16), so the CPU reference evaluates the same coefficients.

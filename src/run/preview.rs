@@ -208,6 +208,15 @@ impl Grid {
                 [200, 255, 200],
             );
         }
+        out.push(Label {
+            x: 16,
+            y: 12,
+            text: format!(
+                "upright, support at z = 0; grid step {}; axes x red, y green, z blue",
+                trim(self.step)
+            ),
+            color: [220, 220, 220],
+        });
         out
     }
 }

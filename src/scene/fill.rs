@@ -470,7 +470,7 @@ fn warnings(input: &FillInput, stats: &FillStats) -> Vec<String> {
         let share = stats.odd_rays as f64 / stats.rays_hit.max(1) as f64;
         if share > OPEN_RAY_SHARE {
             w.push(format!(
-                "fill: {:.0}% of the rays that meet the surface cross it an odd number of times: the surface looks open (or has holes wider than the spacing {h:.3e}); only voxels that rays agree on are filled. For an open capture use {{\"mode\": \"closing\"}} (see docs/physics.md, interior filling)",
+                "fill: {:.0}% of the rays that meet the surface cross it an odd number of times: the surface looks open (or has holes wider than the spacing {h:.3e}); only voxels that rays agree on are filled. For an open capture use {{\"mode\": \"closing\"}} (docs/captures.md, filling an open capture)",
                 100.0 * share
             ));
         }

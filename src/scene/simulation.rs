@@ -80,10 +80,15 @@ pub fn prepare(
         .filter(|&i| scene.objects[i].physics.is_some())
         .collect();
     let Some(spec) = &scene.simulation else {
-        if let Some(&i) = simulated.first() {
+        let collider = scene
+            .objects
+            .iter()
+            .position(|obj| obj.collider.is_some())
+            .map(|i| (i, "collider"));
+        if let Some((i, field)) = simulated.first().map(|&i| (i, "physics")).or(collider) {
             return Err(SceneError::invalid(
                 o,
-                format!("objects[{i}].physics"),
+                format!("objects[{i}].{field}"),
                 "set",
                 "a `simulation` block in the scene",
             ));

@@ -150,7 +150,17 @@ pub fn read(bytes: &[u8], file: &str) -> Result<(Builder, u32), SplatError> {
 
 fn read_gzip(bytes: &[u8], file: &str) -> Result<(Builder, u32), SplatError> {
     let mut gz = flate2::read::GzDecoder::new(bytes);
-    let gzip_error = |e: std::io::Error| damaged(file, format!("gzip stream: {e}"));
+    let gzip_error = |e: std::io::Error| {
+        let text = e.to_string();
+        if e.kind() == std::io::ErrorKind::UnexpectedEof || text.contains("incomplete") {
+            damaged(
+                file,
+                format!("truncated: the gzip stream ends early ({text})"),
+            )
+        } else {
+            damaged(file, format!("gzip stream: {text}"))
+        }
+    };
     let mut head = [0u8; 16];
     let mut got = 0;
     while got < 16 {
