@@ -84,6 +84,29 @@ fn params(dt: f64, boundaries: Boundaries) -> StepParams {
 
 /// Free fall on the GPU: no stress, no walls reached; matches the discrete formula
 /// x_n = x₀ + n v₀ Δt + g Δt² n(n+1)/2 to f32 round-off, and F stays I.
+/// An elastic cube of `material` (ρ = 1000) in the unit box at Δx = 1/24, thrown with
+/// velocity `v`, stepped at the CFL Δt under `boundaries`.
+fn thrown_cube(material: Material, v: DVec3, boundaries: Boundaries) -> Scene {
+    let dx = 1.0 / 24.0;
+    let mut particles = Particles::sample_box(
+        DVec3::new(0.35, 0.45, 0.35),
+        DVec3::new(0.6, 0.7, 0.6),
+        dx / 2.0,
+        1000.0,
+    );
+    particles.set_material(0, &material);
+    particles.v.iter_mut().for_each(|p| *p = v);
+    let dt = cfl_dt(&material, 1000.0, dx, 0.4);
+    Scene {
+        particles,
+        grid_lo: DVec3::ZERO,
+        grid_hi: DVec3::ONE,
+        dx,
+        materials: vec![material],
+        params: params(dt, boundaries),
+    }
+}
+
 #[test]
 fn gpu_free_fall_matches_the_discrete_formula() {
     for gpu in gpus() {
@@ -130,38 +153,20 @@ fn gpu_elastic_step_matches_the_cpu_reference() {
             Material::neo_hookean(2e4, 0.3),
         ] {
             let dx = 1.0 / 24.0;
-            let mut particles = Particles::sample_box(
-                DVec3::new(0.35, 0.45, 0.35),
-                DVec3::new(0.6, 0.7, 0.6),
-                dx / 2.0,
-                1000.0,
-            );
-            particles.set_material(0, &material);
-            particles
-                .v
-                .iter_mut()
-                .for_each(|v| *v = DVec3::new(0.5, -1.0, 0.2));
             let slope = PlaneCollider {
                 point: DVec3::new(0.5, 0.3, 0.5),
                 normal: DVec3::new(0.3, 1.0, 0.0),
                 condition: Condition::SLIP.with_friction(0.3),
             };
-            let dt = cfl_dt(&material, 1000.0, dx, 0.4);
-            let scene = Scene {
-                particles,
-                grid_lo: DVec3::ZERO,
-                grid_hi: DVec3::ONE,
-                dx,
-                materials: vec![material],
-                params: params(
-                    dt,
-                    Boundaries {
-                        walls: DomainWalls::default(),
-                        colliders: vec![slope],
-                        surface: None,
-                    },
-                ),
-            };
+            let scene = thrown_cube(
+                material,
+                DVec3::new(0.5, -1.0, 0.2),
+                Boundaries {
+                    walls: DomainWalls::default(),
+                    colliders: vec![slope],
+                    surface: None,
+                },
+            );
             for path in paths(&gpu) {
                 let (worst, cpu, _) = compare(&gpu, path, &scene, 150, 3);
                 let moved = cpu
@@ -192,18 +197,7 @@ fn gpu_step_with_a_surface_collider_matches_the_cpu_reference() {
     use splatter::sim::boundary::SurfaceCollider;
     for gpu in gpus() {
         let material = Material::neo_hookean(2e4, 0.3);
-        let dx = 1.0 / 24.0;
-        let mut particles = Particles::sample_box(
-            DVec3::new(0.35, 0.45, 0.35),
-            DVec3::new(0.6, 0.7, 0.6),
-            dx / 2.0,
-            1000.0,
-        );
-        particles.set_material(0, &material);
-        particles
-            .v
-            .iter_mut()
-            .for_each(|v| *v = DVec3::new(0.3, -1.0, 0.0));
+        let dx: f64 = 1.0 / 24.0;
         // The surface y = 0.3 + 0.3 (0.5 − x) (a slope), φ its signed distance.
         let n = DVec3::new(0.3, 1.0, 0.0).normalize();
         let point = DVec3::new(0.5, 0.3, 0.5);
@@ -222,22 +216,15 @@ fn gpu_step_with_a_surface_collider_matches_the_cpu_reference() {
             phi,
             condition: Condition::SEPARATE.with_friction(0.3),
         };
-        let dt = cfl_dt(&material, 1000.0, dx, 0.4);
-        let scene = Scene {
-            particles,
-            grid_lo: DVec3::ZERO,
-            grid_hi: DVec3::ONE,
-            dx,
-            materials: vec![material],
-            params: params(
-                dt,
-                Boundaries {
-                    walls: DomainWalls::default(),
-                    colliders: vec![],
-                    surface: Some(surface),
-                },
-            ),
-        };
+        let scene = thrown_cube(
+            material,
+            DVec3::new(0.3, -1.0, 0.0),
+            Boundaries {
+                walls: DomainWalls::default(),
+                colliders: vec![],
+                surface: Some(surface),
+            },
+        );
         for path in paths(&gpu) {
             let (worst, cpu, _) = compare(&gpu, path, &scene, 150, 3);
             let deepest = cpu

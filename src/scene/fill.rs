@@ -163,6 +163,17 @@ impl Voxels {
         let c = ((p - self.lo) / self.h).floor();
         [c.x as i64, c.y as i64, c.z as i64]
     }
+    /// The indices of the (up to six) face neighbours of voxel `idx` on the grid.
+    fn neighbours(&self, idx: usize) -> impl Iterator<Item = usize> + '_ {
+        let c = self.coords(idx);
+        [(0, -1), (0, 1), (1, -1), (1, 1), (2, -1), (2, 1)]
+            .into_iter()
+            .filter_map(move |(axis, step)| {
+                let mut n = c.map(|v| v as i64);
+                n[axis] += step;
+                self.inside(n).map(|n| self.index(n))
+            })
+    }
     fn inside(&self, c: [i64; 3]) -> Option<[usize; 3]> {
         let ok = (0..3).all(|a| c[a] >= 0 && (c[a] as u64) < self.n[a] as u64);
         ok.then(|| c.map(|v| v as usize))
@@ -409,12 +420,7 @@ fn flood_outside(grid: &Voxels, wall: &[bool]) -> Vec<bool> {
         }
     }
     while let Some(idx) = queue.pop_front() {
-        let c = grid.coords(idx);
-        for (axis, step) in [(0, -1), (0, 1), (1, -1), (1, 1), (2, -1), (2, 1)] {
-            let mut n = c.map(|v| v as i64);
-            n[axis] += step;
-            let Some(n) = grid.inside(n) else { continue };
-            let nidx = grid.index(n);
+        for nidx in grid.neighbours(idx) {
             if !outside[nidx] && !wall[nidx] {
                 outside[nidx] = true;
                 queue.push_back(nidx);
@@ -683,12 +689,7 @@ fn flood_donors(grid: &Voxels, by_voxel: &[(u32, u32)]) -> Vec<u32> {
         queue.push_back(run[0].0 as usize);
     }
     while let Some(idx) = queue.pop_front() {
-        let c = grid.coords(idx);
-        for (axis, step) in [(0, -1), (0, 1), (1, -1), (1, 1), (2, -1), (2, 1)] {
-            let mut n = c.map(|v| v as i64);
-            n[axis] += step;
-            let Some(n) = grid.inside(n) else { continue };
-            let nidx = grid.index(n);
+        for nidx in grid.neighbours(idx) {
             if donor[nidx] == u32::MAX {
                 donor[nidx] = donor[idx];
                 queue.push_back(nidx);

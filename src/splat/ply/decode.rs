@@ -68,6 +68,24 @@ impl Scalar {
 /// Most values one vertex contributes: 3 + 3 + 45 + 1 + 3 + 4 + 3 + 1 (label) = 63.
 pub(super) const MAX_VALUES: usize = 64;
 
+/// The 3DGS vertex properties in their standard order: `x y z`, with `normals` also
+/// `nx ny nz`, then `f_dc_0..2`, `rest` × `f_rest_*`, `opacity`, `scale_0..2`, `rot_0..3`.
+pub(super) fn gaussian_properties(normals: bool, rest: usize) -> Vec<String> {
+    let normal: &[&str] = if normals { &["nx", "ny", "nz"] } else { &[] };
+    let mut names: Vec<String> = ["x", "y", "z"]
+        .iter()
+        .chain(normal)
+        .chain(&["f_dc_0", "f_dc_1", "f_dc_2"])
+        .map(|s| s.to_string())
+        .collect();
+    names.extend((0..rest).map(|j| format!("f_rest_{j}")));
+    let tail = [
+        "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
+    ];
+    names.extend(tail.iter().map(|s| s.to_string()));
+    names
+}
+
 /// Which vertex properties hold the values we need, in canonical order:
 /// `x y z | f_dc_0..2 | f_rest_0..R−1 | opacity | scale_0..2 | rot_0..3 | [nx ny nz]`.
 pub(super) struct Layout {
@@ -104,18 +122,7 @@ impl Layout {
                 })
             }
         };
-        let mut names: Vec<String> = ["x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect();
-        names.extend((0..rest).map(|j| format!("f_rest_{j}")));
-        names.extend(
-            [
-                "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
-            ]
-            .iter()
-            .map(|s| s.to_string()),
-        );
+        let mut names = gaussian_properties(false, rest);
         let normal_idx: Vec<Option<usize>> =
             ["nx", "ny", "nz"].iter().map(|n| index_of(n)).collect();
         let has_normals = normal_idx.iter().all(|i| {

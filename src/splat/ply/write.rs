@@ -59,20 +59,7 @@ pub fn write_ply_bytes(
         }
     }
     let _ = writeln!(header, "element vertex {}", cloud.len());
-    let mut names: Vec<String> = [
-        "x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    names.extend((0..rest).map(|j| format!("f_rest_{j}")));
-    names.extend(
-        [
-            "opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3",
-        ]
-        .iter()
-        .map(|s| s.to_string()),
-    );
+    let names = super::decode::gaussian_properties(true, rest);
     for n in &names {
         let _ = writeln!(header, "property float {n}");
     }
