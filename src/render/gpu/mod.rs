@@ -703,6 +703,26 @@ impl GpuRenderer {
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
 
         let start = std::time::Instant::now();
+        let (rgba, stats) = self.read_image(gpu, f)?;
+        let readback_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok((
+            RenderedImage {
+                width: f.width,
+                height: f.height,
+                rgba,
+                stats,
+                dropped_intersections: 0,
+            },
+            FrameTimings {
+                render_ms,
+                readback_ms,
+                passes,
+            },
+        ))
+    }
+
+    /// Copy the image and the frame's counters back to the CPU.
+    fn read_image(&self, gpu: &GpuContext, f: &FrameBuffers) -> Result<(Vec<u8>, Stats), GpuError> {
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -720,21 +740,7 @@ impl GpuRenderer {
         let rgba = read_buffer(gpu, &f.readback)?;
         let stats_bytes = read_buffer(gpu, &f.stats_readback)?;
         let stats: Stats = *bytemuck::from_bytes(&stats_bytes[..std::mem::size_of::<Stats>()]);
-        let readback_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok((
-            RenderedImage {
-                width: f.width,
-                height: f.height,
-                rgba,
-                stats,
-                dropped_intersections: 0,
-            },
-            FrameTimings {
-                render_ms,
-                readback_ms,
-                passes,
-            },
-        ))
+        Ok((rgba, stats))
     }
 }
 
