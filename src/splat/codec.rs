@@ -193,20 +193,6 @@ pub fn decode_parallel(
     all
 }
 
-/// The rest SH coefficients of Gaussian `i` in the PLY's channel-major order
-/// (`[c * (K − 1) + (k − 1)]`), from the cloud's coefficient-major order.
-pub fn rest_channel_major(cloud: &GaussianCloud, i: usize) -> Vec<f32> {
-    let k = sh_coeff_count(cloud.sh_degree);
-    let sh = cloud.sh_of(i);
-    let mut out = vec![0.0; 3 * (k - 1)];
-    for c in 0..3 {
-        for j in 1..k {
-            out[c * (k - 1) + (j - 1)] = sh[j * 3 + c];
-        }
-    }
-    out
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -8,6 +8,7 @@
 use ply_rs_bw::ply::{ElementDef, Header, PropertyType, ScalarType};
 
 use super::codec::{decode_parallel, Builder, Decoded, Format, SplatError, SH_C0};
+use super::ply::scalar_size;
 
 /// Gaussians per chunk.
 pub const CHUNK: usize = 256;
@@ -70,15 +71,6 @@ fn record(def: &ElementDef, file: &str) -> Result<Record, SplatError> {
         size,
         count: def.count,
     })
-}
-
-fn scalar_size(t: &ScalarType) -> usize {
-    match t {
-        ScalarType::Char | ScalarType::UChar => 1,
-        ScalarType::Short | ScalarType::UShort => 2,
-        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
-        ScalarType::Double => 8,
-    }
 }
 
 /// Byte offset of property `name` in `def`'s records, checked to be of type `want`.

@@ -136,12 +136,13 @@ pub fn inspect(cloud: &GaussianCloud) -> Inspection {
         .map(|i| cloud.positions[i])
         .collect();
     let axis_scores = AXES.map(|a| seen_top_score(&core, axis_vector(a).unwrap_or(Vec3::Z)));
-    let (up, evidence) = estimate_up(&core, size.length(), &axis_scores);
+    let plane = support_plane(&core, size.length());
+    let (up, evidence) = estimate_up(plane, &axis_scores);
     let mut heights: Vec<f32> = core.iter().map(|p| p.dot(up)).collect();
     heights.sort_by(f32::total_cmp);
     let support = match (&evidence, heights.is_empty()) {
         (_, true) => 0.0,
-        (UpEvidence::SupportPlane { .. }, _) => support_plane(&core, size.length())
+        (UpEvidence::SupportPlane { .. }, _) => plane
             .map_or(heights[heights.len() / 100], |(normal, offset, _)| {
                 offset * normal.dot(up).signum()
             }),
@@ -231,9 +232,10 @@ fn seen_top_score(core: &[Vec3], up: Vec3) -> f32 {
     (top as f32 - bottom as f32) / core.len() as f32
 }
 
-/// Up from a support plane, else from a seen top, else the convention.
-fn estimate_up(core: &[Vec3], diagonal: f32, scores: &[f32; 6]) -> (Vec3, UpEvidence) {
-    if let Some((normal, _, share)) = support_plane(core, diagonal) {
+/// Up from a support plane (as [`support_plane`] found it), else from a seen top, else
+/// the convention.
+fn estimate_up(plane: Option<(Vec3, f32, f32)>, scores: &[f32; 6]) -> (Vec3, UpEvidence) {
+    if let Some((normal, _, share)) = plane {
         return (snap_to_axis(normal), UpEvidence::SupportPlane { share });
     }
     let mut order: Vec<usize> = (0..6).collect();

@@ -555,15 +555,14 @@ fn encode_streams(cloud: &GaussianCloud, fb: u32) -> [Vec<u8>; 6] {
     [pos, alpha, color, scales, rot, sh]
 }
 
-fn header_bytes(cloud: &GaussianCloud, version: u32, fb: u32, flags: u8) -> Vec<u8> {
+/// The 16 bytes every version starts with; `last` is reserved (versions 1–3) or the
+/// stream count (version 4).
+fn header_bytes(cloud: &GaussianCloud, version: u32, fb: u32, flags: u8, last: u8) -> Vec<u8> {
     let mut h = Vec::with_capacity(32);
     h.extend_from_slice(&MAGIC.to_le_bytes());
     h.extend_from_slice(&version.to_le_bytes());
     h.extend_from_slice(&(cloud.len() as u32).to_le_bytes());
-    h.push(cloud.sh_degree as u8);
-    h.push(fb as u8);
-    h.push(flags);
-    h.push(0);
+    h.extend_from_slice(&[cloud.sh_degree as u8, fb as u8, flags, last]);
     h
 }
 
@@ -578,7 +577,7 @@ pub fn write(cloud: &GaussianCloud, version: SpzVersion) -> Vec<u8> {
         SpzVersion::V3 => {
             use std::io::Write;
             let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
-            let mut all = header_bytes(cloud, 3, fb, flags);
+            let mut all = header_bytes(cloud, 3, fb, flags, 0);
             for s in &streams {
                 all.extend_from_slice(s);
             }
@@ -597,10 +596,7 @@ pub fn write(cloud: &GaussianCloud, version: SpzVersion) -> Vec<u8> {
                     )
                 })
                 .collect();
-            let mut out = header_bytes(cloud, 4, fb, flags);
-            out.push(0); // placeholder, replaced below
-            out.truncate(15);
-            out.push(kept.len() as u8);
+            let mut out = header_bytes(cloud, 4, fb, flags, kept.len() as u8);
             out.extend_from_slice(&((32 + ext.len()) as u32).to_le_bytes());
             out.extend_from_slice(&[0u8; 12]);
             out.extend_from_slice(&ext);

@@ -39,6 +39,11 @@ use body::{read_ascii_body, read_binary_body};
 use decode::{name_labels, Layout};
 pub use write::{write_ply, write_ply_bytes};
 
+/// Bytes of one value of a PLY scalar type (for readers of other PLY layouts).
+pub(crate) fn scalar_size(t: &ply_rs_bw::ply::ScalarType) -> usize {
+    decode::Scalar::of(t).size()
+}
+
 /// Body encoding of a PLY file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PlyFormat {
