@@ -419,6 +419,10 @@ pub fn scene_hash(scene: &Scene, splats: &Splats, setup: Option<&SimulationSetup
         h.section(b"simulation");
         hash_splats(&mut h, &s.splats);
         h.write(&(s.static_count as u64).to_le_bytes());
+        for (p, d) in s.binding.particle.iter().zip(&s.binding.offset) {
+            h.write(&p.to_le_bytes());
+            h.f64s(d.to_array().map(f64::from));
+        }
         let p = &s.particles;
         h.write(&(p.len() as u64).to_le_bytes());
         h.f64s(dvec3s(&p.x)).f64s(dvec3s(&p.v));

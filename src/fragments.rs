@@ -14,6 +14,17 @@ use glam::DVec3;
 
 /// The fragment sizes (particle counts) of `points`, largest first.
 pub fn fragment_sizes(points: &[DVec3], link: f64) -> Vec<usize> {
+    let ids = fragment_ids(points, link);
+    let mut sizes = vec![0; ids.iter().max().map_or(0, |&m| m as usize + 1)];
+    for &f in &ids {
+        sizes[f as usize] += 1;
+    }
+    sizes
+}
+
+/// The fragment of each of `points`, numbered by size (0: the largest; ties by the lowest
+/// point index).
+pub fn fragment_ids(points: &[DVec3], link: f64) -> Vec<u32> {
     assert!(link > 0.0, "fragment link distance must be positive");
     let cell = |p: DVec3| (p / link).floor().as_ivec3();
     let mut cells: HashMap<glam::IVec3, Vec<u32>> = HashMap::new();
@@ -39,13 +50,19 @@ pub fn fragment_sizes(points: &[DVec3], link: f64) -> Vec<usize> {
             }
         }
     }
-    let mut sizes: HashMap<usize, usize> = HashMap::new();
-    for i in 0..points.len() {
-        *sizes.entry(sets.find(i)).or_default() += 1;
+    // Roots are each set's lowest index (union keeps the smaller).
+    let roots: Vec<usize> = (0..points.len()).map(|i| sets.find(i)).collect();
+    let mut size = vec![0usize; points.len()];
+    for &r in &roots {
+        size[r] += 1;
     }
-    let mut sizes: Vec<usize> = sizes.into_values().collect();
-    sizes.sort_unstable_by(|a, b| b.cmp(a));
-    sizes
+    let mut order: Vec<usize> = (0..points.len()).filter(|&r| size[r] > 0).collect();
+    order.sort_by_key(|&r| (std::cmp::Reverse(size[r]), r));
+    let mut id = vec![0u32; points.len()];
+    for (k, &r) in order.iter().enumerate() {
+        id[r] = k as u32;
+    }
+    roots.iter().map(|&r| id[r]).collect()
 }
 
 /// What `--fragments` reports for one body: fragments holding at least `min_share` of its
@@ -61,6 +78,10 @@ pub struct FragmentSummary {
     pub debris: usize,
     /// All fragments, of any size.
     pub fragments: usize,
+    /// The Gaussians the body's particles move, and the share of them moved by the
+    /// largest fragment (0 and 0 until [`with_gaussians`](Self::with_gaussians)).
+    pub gaussians: usize,
+    pub gaussian_largest_share: f64,
 }
 
 impl FragmentSummary {
@@ -74,6 +95,17 @@ impl FragmentSummary {
             largest_share: sizes.first().map_or(0.0, |&s| s as f64 / particles as f64),
             debris: sizes.iter().filter(|&&s| s < floor).sum(),
             fragments: sizes.len(),
+            gaussians: 0,
+            gaussian_largest_share: 0.0,
+        }
+    }
+
+    /// The same, with the count of Gaussians and the share the largest fragment moves.
+    pub fn with_gaussians(self, gaussians: usize, largest_share: f64) -> Self {
+        Self {
+            gaussians,
+            gaussian_largest_share: largest_share,
+            ..self
         }
     }
 }

@@ -28,7 +28,8 @@ pub struct LimitError {
 }
 
 const FEWER_GAUSSIANS: &str = "render fewer Gaussians (a larger procedural spacing, a smaller or pruned PLY, fewer objects) or use a GPU with larger buffers";
-const FEWER_PARTICLES: &str = "simulate fewer particles (a larger procedural spacing, smaller or fewer objects with physics) or use a GPU with larger buffers";
+const FEWER_PARTICLES: &str = "simulate fewer particles (a larger physics.particles spacing, smaller or fewer objects with physics) or use a GPU with larger buffers";
+const FEWER_SIMULATED: &str = "simulate fewer Gaussians (a larger procedural spacing, physics.select or min_opacity to leave some static) or use a GPU with larger buffers";
 const SMALLER_GRID: &str =
     "use a coarser or smaller grid (a larger simulation.dx, or a smaller simulation.domain)";
 const SMALLER_IMAGE: &str = "render a smaller image (--width/--height or output.width/height)";
@@ -90,6 +91,17 @@ pub fn sim_needs(particles: usize, cells: UVec3) -> Vec<Need> {
             advice: SMALLER_GRID,
         },
     ]
+}
+
+/// The derive pass's rest records ([`RestGaussian`](crate::derive::RestGaussian): rest
+/// look and binding) of `gaussians` simulated Gaussians.
+pub fn derive_needs(gaussians: usize) -> Vec<Need> {
+    let record = std::mem::size_of::<crate::derive::RestGaussian>() as u64;
+    vec![Need {
+        what: format!("the rest records of {gaussians} simulated Gaussians"),
+        bytes: gaussians as u64 * record,
+        advice: FEWER_SIMULATED,
+    }]
 }
 
 /// The first need above `limit`, as an error naming `adapter`.

@@ -38,7 +38,7 @@ fn procedural_sphere_fill_matches_volume_and_stays_inside() {
     let obj = format!(
         r#"{{ "procedural": {{ "shape": "sphere", "radius": {r}, "spacing": 0.04, "color": [1, 0, 0] }},
             "transform": {{ "translate": [0.5, 0.5, 0.5] }},
-            "physics": {{ {MATERIAL}, "fill": true }} }}"#
+            "physics": {{ {MATERIAL}, "fill": true, "particles": "gaussians" }} }}"#
     );
     let s = setup(&scene_text(&obj, dx), Path::new(".")).unwrap();
     let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
@@ -73,6 +73,50 @@ fn procedural_sphere_fill_matches_volume_and_stays_inside() {
         s.splats.sh[fill.start * 3..fill.start * 3 + 3],
         s.splats.sh[0..3]
     );
+}
+
+/// The default particles: a jittered lattice at h = Δx/2 over the exact solid, whatever the
+/// object's own spacing; its volume is the sphere's, no particle strays further than the
+/// jitter, and every Gaussian (the object's and the fill's) rides on its nearest particle.
+#[test]
+fn lattice_particles_cover_the_solid_and_carry_every_gaussian() {
+    let (r, dx) = (0.3, 0.02);
+    let h = dx / 2.0;
+    let volume = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+    let centre = DVec3::splat(0.5);
+    for (spacing, fill) in [(0.04, "false"), (0.005, "false"), (0.04, "true")] {
+        let obj = format!(
+            r#"{{ "procedural": {{ "shape": "sphere", "radius": {r}, "spacing": {spacing}, "color": [1, 0, 0] }},
+                "transform": {{ "translate": [0.5, 0.5, 0.5] }},
+                "physics": {{ {MATERIAL}, "fill": {fill} }} }}"#
+        );
+        let s = setup(&scene_text(&obj, dx), Path::new(".")).unwrap();
+        let n = s.particles.len() as f64;
+        let expected = volume / (h * h * h);
+        println!("lattice, object spacing {spacing}, fill {fill}: {n} particles for {} Gaussians (volume/h³ = {expected:.0})", s.splats.len());
+        assert!(
+            (n - expected).abs() / expected < 0.03,
+            "{n} vs {expected:.0}"
+        );
+        let v: f64 = s.particles.volume0.iter().sum();
+        assert!((v - volume).abs() / volume < 0.03, "volume {v} vs {volume}");
+        // Voxel centres inside, moved by at most h/4 per axis.
+        let reach = r + 0.25 * h * 3f64.sqrt() + 1e-9;
+        assert!(s.particles.x.iter().all(|x| x.distance(centre) <= reach));
+        assert_eq!(s.binding.len(), s.splats.len() - s.static_count);
+        assert_eq!(s.bodies.len(), 1);
+        assert_eq!(s.bodies[0].particles, 0..s.particles.len());
+        for (k, (&p, d)) in s.binding.particle.iter().zip(&s.binding.offset).enumerate() {
+            let g = s.static_count + k;
+            let x = s.splats.means[g].as_dvec3();
+            assert!((x - s.particles.x[p as usize] - d.as_dvec3()).length() < 1e-6);
+            // The nearest particle is never further than a voxel's diagonal.
+            assert!(
+                d.length() < 3f32.sqrt() * h as f32,
+                "Gaussian {g}: offset {d}"
+            );
+        }
+    }
 }
 
 /// A surface-only sphere cloud (tangent disks on a Fibonacci sphere).
@@ -322,7 +366,7 @@ fn selection_splits_an_object_into_static_and_simulated() {
     let ground = r#"{ "procedural": { "shape": "box", "size": [0.2, 0.2, 0.2], "spacing": 0.05, "color": [0, 1, 0] },
                       "transform": { "translate": [0.5, 0.5, 0.2] } }"#;
     let obj = format!(
-        r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "box": {{ "lo": [0, 0, 0.5], "hi": [1, 1, 1] }} }}, "min_opacity": 0.05 }} }}, {ground}"#
+        r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "box": {{ "lo": [0, 0, 0.5], "hi": [1, 1, 1] }} }}, "min_opacity": 0.05, "particles": "gaussians" }} }}, {ground}"#
     );
     let s = setup(&scene_text(&obj, 0.02), dir.path()).unwrap();
     let moving = (0..cloud.len())
@@ -344,7 +388,7 @@ fn selection_splits_an_object_into_static_and_simulated() {
     assert!(s.particles.x.iter().all(|x| x.z >= 0.5));
     // The same with a sphere: everything within 0.1 of the top pole.
     let obj = format!(
-        r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "sphere": {{ "center": [0.5, 0.5, 0.7], "radius": 0.1 }} }} }} }}"#
+        r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "sphere": {{ "center": [0.5, 0.5, 0.7], "radius": 0.1 }} }}, "particles": "gaussians" }} }}"#
     );
     let s = setup(&scene_text(&obj, 0.02), dir.path()).unwrap();
     let moving = (0..cloud.len())

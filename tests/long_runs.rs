@@ -113,6 +113,11 @@ fn assert_same_frames(a: &Path, b: &Path, count: usize) {
 /// An elastic cube falling onto the ground: `frames` frames at 64×48 (125 particles, 25
 /// steps per frame).
 fn sim_scene(frames: u32, e: f64) -> String {
+    sim_scene_with(frames, e, r#"{ "spacing": 0.03 }"#)
+}
+
+/// [`sim_scene`] with the cube's `physics.particles` as given.
+fn sim_scene_with(frames: u32, e: f64, particles: &str) -> String {
     format!(
         r#"{{
   "output": {{"width": 64, "height": 48, "frames": {frames}, "fps": 24}},
@@ -122,7 +127,7 @@ fn sim_scene(frames: u32, e: f64) -> String {
     {{"name": "cube",
       "procedural": {{"shape": "box", "size": [0.15, 0.15, 0.15], "spacing": 0.03, "color": [0.9, 0.2, 0.2]}},
       "transform": {{"translate": [0.3, 0.3, 0.35]}},
-      "physics": {{"material": {{"model": "fixed_corotated", "E": {e}, "nu": 0.3, "density": 2}}, "velocity": [0, 0, -1]}}}}
+      "physics": {{"material": {{"model": "fixed_corotated", "E": {e}, "nu": 0.3, "density": 2}}, "velocity": [0, 0, -1], "particles": {particles}}}}}
   ]
 }}"#
     )
@@ -134,12 +139,19 @@ fn manifest(dir: &Path) -> serde_json::Value {
 
 /// The acceptance test of checkpoints: kill a deterministic run before frame 5 (checkpoints
 /// every 2 frames, so the last one is frame 4), resume it, and compare every frame with an
-/// uninterrupted run byte for byte.
+/// uninterrupted run byte for byte; with Gaussians bound to a particle lattice and with one
+/// particle per Gaussian.
 #[test]
 fn killed_run_resumes_to_the_frames_of_an_uninterrupted_run() {
+    for particles in [r#"{ "spacing": 0.03 }"#, r#""gaussians""#] {
+        killed_run_resumes(particles);
+    }
+}
+
+fn killed_run_resumes(particles: &str) {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
-    write(d, "sim.json", &sim_scene(9, 200.0));
+    write(d, "sim.json", &sim_scene_with(9, 200.0, particles));
     let common = [
         "render",
         "sim.json",
@@ -364,7 +376,7 @@ fn resume_refuses_foreign_or_damaged_checkpoints() {
     assert_ne!(bytes(&cp), other_version);
 }
 
-/// Two deterministic runs of the fracture scene (NACC, 4139 particles, 242 steps per frame)
+/// Two deterministic runs of the fracture scene (NACC, 4224 particles moving 33k Gaussians)
 /// give byte-identical frames on the same adapter.
 #[test]
 fn deterministic_fracture_runs_are_byte_identical() {

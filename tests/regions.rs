@@ -44,11 +44,18 @@ fn volume_of(s: &SimulationSetup, m: u32) -> f64 {
 /// lower half), and the shell's fill particles take its colour.
 #[test]
 fn shell_and_box_regions_split_a_sphere_by_geometry() {
+    for particles in [r#""gaussians""#, r#"{ "spacing": 0.01 }"#] {
+        println!("particles: {particles}");
+        shell_and_box_regions(particles);
+    }
+}
+
+fn shell_and_box_regions(particles: &str) {
     let (r, d, dx): (f64, f64, f64) = (0.15, 0.03, 0.02);
     let obj = format!(
         r#"{{ "procedural": {{ "shape": "sphere", "radius": {r}, "spacing": 0.02, "color": [1, 1, 1] }},
             "transform": {{ "translate": [0.5, 0.5, 0.5] }},
-            "physics": {{ "material": {soft}, "fill": true, "regions": [
+            "physics": {{ "material": {soft}, "fill": true, "particles": {particles}, "regions": [
               {{ "name": "skin", "shell": {{ "from": 0, "to": {d} }}, "material": {stiff}, "color": [1, 0, 0] }},
               {{ "box": {{ "lo": [0, 0, 0], "hi": [1, 1, 0.5] }}, "material": {mid} }}
             ] }} }}"#,
@@ -95,7 +102,7 @@ fn shell_and_box_regions_split_a_sphere_by_geometry() {
     let white_dc = splatter::splat::sh::rgb_to_dc([1.0, 1.0, 1.0]);
     let (mut red, mut white) = (0, 0);
     for g in fill.start..fill.start + fill.len {
-        let p = g - s.static_count;
+        let p = s.binding.particle[g - s.static_count] as usize;
         let dc = &s.splats.sh[g * 3..g * 3 + 3];
         if s.particles.material[p] == 1 {
             assert_eq!(dc, red_dc, "shell fill particle");
@@ -246,7 +253,7 @@ fn label_regions_follow_the_gaussians_labels() {
             r#"{{ "procedural": {{ "shape": "sphere", "radius": 0.15, "spacing": 0.02, "color": [1, 1, 1],
                                  "shells": [{{ "depth": 0.04, "color": [0, 1, 0] }}] }},
                 "transform": {{ "translate": [0.5, 0.5, 0.5] }},
-                "physics": {{ "material": {m}, "fill": true,
+                "physics": {{ "material": {m}, "fill": true, "particles": "gaussians",
                               "regions": [{{ "label": "{label}", "material": {stiff} }}] }} }}"#,
             m = material(1000.0),
             stiff = material(5000.0)

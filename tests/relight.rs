@@ -479,7 +479,15 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
                 },
             )
             .unwrap();
-        let derive = Derive::new(&gpu, &sim, &renderer, &splats, 0).unwrap();
+        let derive = Derive::new(
+            &gpu,
+            &sim,
+            &renderer,
+            &splats,
+            0,
+            &splatter::derive::Binding::identity(0, splats.len()),
+        )
+        .unwrap();
         sim.step(&gpu, 1000).unwrap();
         derive.run(&gpu).unwrap();
         let means: Vec<Vec3> = renderer

@@ -354,11 +354,13 @@ fn fragment_rows(out: &Path) -> Vec<FragmentRow> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height")
+        Some("frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray")
     );
     lines
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
+            // Bound Gaussians stay with the fragment of the particle that moves them.
+            assert_eq!(f[12], "0", "Gaussians pulled across a crack: {l}");
             (
                 f[0].parse().unwrap(),
                 f[1].to_string(),

@@ -3,7 +3,7 @@
 //! CPU reference renderer fed with the CPU-derived Gaussians.
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3};
-use splatter::derive::{derive_gaussian, derive_normal, rest_covariance, Derive};
+use splatter::derive::{derive_gaussian, derive_normal, rest_covariance, Binding, Derive};
 use splatter::gpu::GpuContext;
 use splatter::relight::{oct_decode, oct_encode, ShadingParams};
 use splatter::render::gpu::layout::GaussianIn;
@@ -104,10 +104,17 @@ fn deform_and_derive_lit(
             )
             .unwrap();
     }
-    Derive::new(gpu, &sim, &renderer, splats, offset as u32)
-        .unwrap()
-        .run(gpu)
-        .unwrap();
+    Derive::new(
+        gpu,
+        &sim,
+        &renderer,
+        splats,
+        offset as u32,
+        &Binding::identity(0, particles.len()),
+    )
+    .unwrap()
+    .run(gpu)
+    .unwrap();
     renderer
 }
 
@@ -230,7 +237,15 @@ fn jelly_cube_is_simulated_derived_and_rendered_on_the_gpu() {
     let sim = GpuSim::new(&gpu, &particles, &grid, &[material], &params).unwrap();
     let mut renderer = GpuRenderer::new(&gpu);
     renderer.upload(&gpu, &splats).unwrap();
-    let derive = Derive::new(&gpu, &sim, &renderer, &splats, 0).unwrap();
+    let derive = Derive::new(
+        &gpu,
+        &sim,
+        &renderer,
+        &splats,
+        0,
+        &Binding::identity(0, particles.len()),
+    )
+    .unwrap();
     let cam = Camera::look_at(
         Vec3::new(0.5, -1.2, 0.4),
         Vec3::new(0.5, 0.5, 0.3),

@@ -1,7 +1,8 @@
-// Derive (per particle, docs/method.md §6): the deformed Gaussian of a simulated particle, written
-// straight into the renderer's Gaussian buffer: mean x_p, covariance F A Fᵀ (A the rest
-// covariance in world space), and the rest-frame rotation composed with the rotation of
-// F's polar decomposition (SH are then evaluated along that frame). Opacity and SH are
+// Derive (per simulated Gaussian, docs/method.md §6): the Gaussian moved by the particle p it
+// is bound to, written straight into the renderer's Gaussian buffer: mean x_p + F (X_g − X_p)
+// (x_p exactly when one particle stands for one Gaussian: the offset is zero), covariance
+// F A Fᵀ (A the rest covariance in world space), and the rest-frame rotation composed with
+// the rotation of F's polar decomposition (SH are then evaluated along that frame). Opacity and SH are
 // unchanged. With relighting on, the normal too: n = F⁻ᵀ n₀ normalised (normals are
 // covectors; the cofactor matrix det(F)·F⁻ᵀ avoids the division), written into the
 // renderer's shading records. Mirrors `sim::derive::derive_gaussian` and `derive_normal`.
@@ -23,6 +24,8 @@ struct RestGaussian {
     cov_b: vec4<f32>,
     // rest-frame rotation (x, y, z, w)
     rotation: vec4<f32>,
+    // the binding: rest offset X_g − X_p, and the particle's index p (as bits)
+    anchor: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> params: DeriveParams;
@@ -66,11 +69,12 @@ fn quat_mul(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let p = (wid.x + wid.y * nwg.x) * 256u + lid;
-    if p >= params.count {
+    let g = (wid.x + wid.y * nwg.x) * 256u + lid;
+    if g >= params.count {
         return;
     }
-    let r = rest[p];
+    let r = rest[g];
+    let p = bitcast<u32>(r.anchor.w);
     let a = mat3x3<f32>(
         vec3<f32>(r.cov_a.x, r.cov_a.y, r.cov_a.z),
         vec3<f32>(r.cov_a.y, r.cov_a.w, r.cov_b.x),
@@ -85,10 +89,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             let cof = mat3x3<f32>(cross(f[1], f[2]), cross(f[2], f[0]), cross(f[0], f[1]));
             packed = oct_encode(cof * oct_decode(bits));
         }
-        shading[params.offset + p].x = packed;
+        shading[params.offset + g].x = packed;
     }
-    gaussians[params.offset + p] = GaussianIn(
-        vec4<f32>(x_mass[p].xyz, r.cov_b.z),
+    gaussians[params.offset + g] = GaussianIn(
+        vec4<f32>(x_mass[p].xyz + f * r.anchor.xyz, r.cov_b.z),
         vec4<f32>(c[0][0], c[1][0], c[2][0], c[1][1]),
         vec4<f32>(c[2][1], c[2][2], 0.0, 0.0),
         rot);

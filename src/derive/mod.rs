@@ -1,12 +1,16 @@
 //! The derive stage: the simulation's state turned into the renderer's Gaussians, on the
-//! GPU and without a readback. Deforming the Gaussians (docs/method.md §6): `shaders/sim/derive.wgsl` writes each
-//! simulated particle's Gaussian — mean x_p, covariance F A Fᵀ, rest frame rotated by
-//! polar(F) — into the renderer's Gaussian buffer, so a frame goes from simulation to
+//! GPU and without a readback. Deforming the Gaussians (docs/method.md §6):
+//! `shaders/sim/derive.wgsl` writes each simulated Gaussian — moved by the particle it is
+//! bound to ([`binding`]): mean x_p + F (X_g − X_p), covariance F A Fᵀ, rest frame rotated
+//! by polar(F) — into the renderer's Gaussian buffer, so a frame goes from simulation to
 //! image without a CPU round trip. [`derive_gaussian`] is the f64 twin the pass is tested
 //! against. Kinematic objects move rigidly ([`RigidDerive`]); simulated objects' normals are
 //! refitted in the deformed configuration by [`normals`].
 
+pub mod binding;
 pub mod normals;
+
+pub use binding::Binding;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DQuat, DVec3};
@@ -29,13 +33,15 @@ pub struct DeriveParams {
     pub _pad: u32,
 }
 
-/// `RestGaussian` of the shader: a particle's Gaussian at rest (world space).
+/// `RestGaussian` of the shader: a simulated Gaussian at rest (world space) and its binding.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct RestGaussian {
     pub cov_a: [f32; 4],
     pub cov_b: [f32; 4],
     pub rotation: [f32; 4],
+    /// X_g − X_p, and the particle's index as bits.
+    pub anchor: [f32; 4],
 }
 
 /// The deformed Gaussian of a particle at `x` with deformation gradient `f`, whose rest
@@ -55,8 +61,8 @@ pub fn derive_normal(f: DMat3, n0: DVec3) -> DVec3 {
     (f.inverse().transpose() * n0).normalize()
 }
 
-/// The derive pass for one simulation whose particles are the Gaussians
-/// `offset .. offset + sim.len()` of the renderer's buffer.
+/// The derive pass for one simulation whose Gaussians are `offset .. offset +
+/// binding.len()` of the renderer's buffer, each moved by the particle `binding` names.
 pub struct Derive {
     kernel: Kernel,
     bind: wgpu::BindGroup,
@@ -66,35 +72,43 @@ pub struct Derive {
 
 impl Derive {
     /// `splats` are all the renderer's Gaussians (as uploaded); the simulated ones start at
-    /// `offset` and are in particle order.
+    /// `offset`, and `binding` says which of `sim`'s particles moves each of them.
     pub fn new(
         gpu: &GpuContext,
         sim: &GpuSim,
         renderer: &GpuRenderer,
         splats: &Splats,
         offset: u32,
+        binding: &Binding,
     ) -> Result<Derive, GpuError> {
+        if let Some(&p) = binding.particle.iter().find(|&&p| p >= sim.len()) {
+            return Err(GpuError::Failed(format!(
+                "derive: a Gaussian is bound to particle {p} of a simulation of {}",
+                sim.len()
+            )));
+        }
         let (x_mass, deformation) = sim.state_buffers();
         Self::over(
             gpu,
             (x_mass, deformation),
-            sim.len(),
+            binding,
             renderer,
             splats,
             offset,
         )
     }
 
-    /// As [`new`](Self::new) for `count` Gaussians whose positions (`vec4`, xyz) and
-    /// deformation gradients (`mat3x3`) are in `state`.
+    /// As [`new`](Self::new) for particles whose positions (`vec4`, xyz) and deformation
+    /// gradients (`mat3x3`) are in `state`.
     fn over(
         gpu: &GpuContext,
         state: (&wgpu::Buffer, &wgpu::Buffer),
-        count: u32,
+        binding: &Binding,
         renderer: &GpuRenderer,
         splats: &Splats,
         offset: u32,
     ) -> Result<Derive, GpuError> {
+        let count = binding.len() as u32;
         let end = offset as usize + count as usize;
         let target = renderer
             .gaussian_buffer()
@@ -111,10 +125,13 @@ impl Derive {
                 let normal = rest_shading.map_or(0, |s| s[i][0]);
                 let c: Sym3 = splats.covariances[i];
                 let q = splats.rotations[i];
+                let k = i - offset as usize;
+                let d = binding.offset[k];
                 RestGaussian {
                     cov_a: [c[0], c[1], c[2], c[3]],
                     cov_b: [c[4], c[5], splats.opacities[i], f32::from_bits(normal)],
                     rotation: [q.x, q.y, q.z, q.w],
+                    anchor: [d.x, d.y, d.z, f32::from_bits(binding.particle[k])],
                 }
             })
             .collect();
@@ -208,7 +225,8 @@ impl RigidDerive {
         };
         let x = buffer("rigid positions", u64::from(count) * 16);
         let f = buffer("rigid rotations", u64::from(count) * 48);
-        let derive = Derive::over(gpu, (&x, &f), count, renderer, splats, offset)?;
+        let binding = Binding::identity(0, count as usize);
+        let derive = Derive::over(gpu, (&x, &f), &binding, renderer, splats, offset)?;
         Ok(RigidDerive { derive, rest, x, f })
     }
 
@@ -254,6 +272,11 @@ mod tests {
     fn layouts_match_wgsl() {
         let src = source();
         assert_layout!(&src, DeriveParams, "DeriveParams", [offset, count]);
-        assert_layout!(&src, RestGaussian, "RestGaussian", [cov_a, cov_b, rotation]);
+        assert_layout!(
+            &src,
+            RestGaussian,
+            "RestGaussian",
+            [cov_a, cov_b, rotation, anchor]
+        );
     }
 }

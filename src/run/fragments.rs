@@ -1,14 +1,20 @@
 //! `--fragments`: per rendered frame and simulated object, how many pieces its particles
-//! form ([`crate::fragments`]), appended to `OUT/fragments.csv` as the frames go.
+//! form ([`crate::fragments`]) and how its Gaussians follow them, appended to
+//! `OUT/fragments.csv` as the frames go.
 
 use std::io::Write;
 use std::path::Path;
 
 use anyhow::{Context, Result};
 
-use crate::fragments::{fragment_sizes, FragmentSummary, PIECE_SHARE};
-use crate::scene::simulation::{PartKind, SimulationSetup};
+use glam::DVec3;
+
+use crate::derive::binding::{bound_mean, Binding};
+use crate::fragments::{fragment_ids, FragmentSummary, PIECE_SHARE};
+use crate::render::splats::mat3_from_sym3;
+use crate::scene::simulation::{Body, SimulationSetup};
 use crate::scene::Scene;
+use crate::sim::svd::symmetric_eigen;
 use crate::sim::{Material, Particles};
 
 /// A CSV field: quoted (with doubled quotes) when it holds a comma, quote or line break.
@@ -22,7 +28,7 @@ fn csv_field(s: &str) -> String {
 
 /// Vertical extent of a body (z from its 1st to its 99th percentile, so that a few
 /// thrown-off particles do not count): how far a slumping heap has sunk.
-fn height_extent(points: &[glam::DVec3]) -> f64 {
+fn height_extent(points: &[DVec3]) -> f64 {
     if points.is_empty() {
         return 0.0;
     }
@@ -30,6 +36,62 @@ fn height_extent(points: &[glam::DVec3]) -> f64 {
     z.sort_unstable_by(f64::total_cmp);
     let at = |q: f64| z[((z.len() - 1) as f64 * q).round() as usize];
     at(0.99) - at(0.01)
+}
+
+/// How a body's Gaussians follow its fragments (the derive pass's f64 twin, on the state
+/// read back).
+struct GaussianFragments {
+    gaussians: usize,
+    /// Share of the Gaussians moved by particles of the largest fragment.
+    largest_share: f64,
+    /// The largest growth of a Gaussian's extent: √(λ_max(F A Fᵀ) / λ_max(A)).
+    stretch: f64,
+    /// Gaussians nearer to a particle of another fragment than to the particle that moves
+    /// them: pulled across a crack.
+    astray: usize,
+}
+
+impl GaussianFragments {
+    fn new(body: &Body, ids: &[u32], state: &Particles, s: &SimulationSetup) -> Self {
+        let first = body.particles.start;
+        let bound = |g: usize| {
+            let k = g - s.static_count;
+            (
+                s.binding.particle[k] as usize,
+                s.binding.offset[k].as_dvec3(),
+            )
+        };
+        let mut in_largest = 0;
+        let mut stretch: f64 = 1.0;
+        let mut means = Vec::with_capacity(body.gaussians.len());
+        for g in body.gaussians.clone() {
+            let (p, offset) = bound(g);
+            in_largest += usize::from(ids[p - first] == 0);
+            let a = mat3_from_sym3(s.splats.covariances[g]).as_dmat3();
+            let f = state.f[p];
+            let rest = symmetric_eigen(a).0.max_element();
+            let now = symmetric_eigen(f * a * f.transpose()).0.max_element();
+            if rest > 0.0 && now.is_finite() {
+                stretch = stretch.max((now / rest).sqrt());
+            }
+            means.push(bound_mean(state.x[p], f, offset).as_vec3());
+        }
+        let points: Vec<DVec3> = body.particles.clone().map(|i| state.x[i]).collect();
+        let nearest = Binding::nearest(&means, &points, 0, s.grid.dx);
+        let astray = body
+            .gaussians
+            .clone()
+            .zip(&nearest.particle)
+            .filter(|&(g, &q)| ids[bound(g).0 - first] != ids[q as usize])
+            .count();
+        let gaussians = body.gaussians.len();
+        GaussianFragments {
+            gaussians,
+            largest_share: in_largest as f64 / gaussians.max(1) as f64,
+            stretch,
+            astray,
+        }
+    }
 }
 
 /// The open `fragments.csv` and the last frame's counts.
@@ -54,7 +116,7 @@ impl FragmentLog {
         if !append {
             writeln!(
                 file,
-                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height"
+                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray"
             )?;
         }
         Ok(Self {
@@ -71,25 +133,12 @@ impl FragmentLog {
         scene: &Scene,
     ) -> Result<()> {
         self.last.clear();
-        let mut objects: Vec<usize> = s
-            .parts
-            .iter()
-            .filter(|p| p.kind != PartKind::Static)
-            .map(|p| p.object)
-            .collect();
-        objects.dedup();
-        for object in objects {
-            // The object's particles: its simulated parts, in particle order.
-            let particles: Vec<usize> = s
-                .parts
-                .iter()
-                .filter(|p| p.object == object && p.kind != PartKind::Static)
-                .flat_map(|p| p.start - s.static_count..p.start - s.static_count + p.len)
-                .collect();
-            let points: Vec<glam::DVec3> = particles.iter().map(|&i| state.x[i]).collect();
-            let damaged = particles
-                .iter()
-                .filter(|&&i| {
+        for body in &s.bodies {
+            let points: Vec<DVec3> = body.particles.clone().map(|i| state.x[i]).collect();
+            let damaged = body
+                .particles
+                .clone()
+                .filter(|&i| {
                     matches!(
                         s.materials[state.material[i] as usize],
                         Material::Nacc { .. }
@@ -97,22 +146,32 @@ impl FragmentLog {
                 })
                 .count();
             let height = height_extent(&points);
-            let sizes = fragment_sizes(&points, s.grid.dx);
-            let summary = FragmentSummary::new(&sizes, PIECE_SHARE);
-            let name = scene.objects[object]
+            let ids = fragment_ids(&points, s.grid.dx);
+            let mut sizes = vec![0; ids.iter().max().map_or(0, |&m| m as usize + 1)];
+            for &f in &ids {
+                sizes[f as usize] += 1;
+            }
+            let look = GaussianFragments::new(body, &ids, state, s);
+            let summary = FragmentSummary::new(&sizes, PIECE_SHARE)
+                .with_gaussians(look.gaussians, look.largest_share);
+            let name = scene.objects[body.object]
                 .name
                 .clone()
-                .unwrap_or_else(|| format!("objects[{object}]"));
+                .unwrap_or_else(|| format!("objects[{}]", body.object));
             let name = csv_field(&name);
             writeln!(
                 self.file,
-                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4}",
+                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4},{},{:.4},{:.4},{}",
                 summary.particles,
                 summary.pieces,
                 summary.largest_share,
                 summary.debris,
                 summary.fragments,
-                damaged as f64 / summary.particles.max(1) as f64
+                damaged as f64 / summary.particles.max(1) as f64,
+                look.gaussians,
+                look.largest_share,
+                look.stretch,
+                look.astray,
             )?;
             self.last.push((name, frame, summary));
         }
@@ -128,13 +187,15 @@ impl FragmentLog {
     /// The closing lines of `--fragments`.
     pub fn describe(last: &[(String, u32, FragmentSummary)]) -> Vec<String> {
         last.iter().map(|(name, frame, s)| format!(
-                "fragments: {name} at frame {frame}: {} piece(s) with ≥ {:.0}% of its {} particles (largest {:.1}%), {} particles of debris, {} fragments in all",
+                "fragments: {name} at frame {frame}: {} piece(s) with ≥ {:.0}% of its {} particles (largest {:.1}%), {} particles of debris, {} fragments in all; the largest moves {:.1}% of its {} Gaussians",
                 s.pieces,
                 PIECE_SHARE * 100.0,
                 s.particles,
                 s.largest_share * 100.0,
                 s.debris,
-                s.fragments
+                s.fragments,
+                s.gaussian_largest_share * 100.0,
+                s.gaussians
             )).collect()
     }
 }

@@ -57,6 +57,7 @@ pub(super) fn execute(
     let mut needs = limits::render_needs(splats.len(), width, height);
     if let Some(s) = &setup {
         needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
+        needs.extend(limits::derive_needs(s.binding.len()));
     }
     limits::check_gpu(gpu, &needs)?;
     if opts.resume {
@@ -260,8 +261,9 @@ fn describe_lighting(l: &SceneLighting, gaussians: usize) -> String {
 
 fn describe_simulation(s: &SimulationSetup, p2g: P2gPath, deterministic: bool) -> String {
     format!(
-        "simulation: {} particles, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame, P2G {}{}",
+        "simulation: {} particles moving {} Gaussians, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame, P2G {}{}",
         s.particles.len(),
+        s.binding.len(),
         s.materials.len(),
         s.grid.cells.x,
         s.grid.cells.y,
@@ -303,7 +305,14 @@ impl<'a> Simulation<'a> {
         let mut sim = GpuSim::with_path(gpu, start, &s.grid, &s.materials, &s.params, p2g)?;
         let colliders: Vec<_> = s.kinematic.iter().map(|k| k.collider.clone()).collect();
         sim.set_kinematic(gpu, &colliders)?;
-        let derive = Derive::new(gpu, &sim, renderer, &s.splats, s.static_count as u32)?;
+        let derive = Derive::new(
+            gpu,
+            &sim,
+            renderer,
+            &s.splats,
+            s.static_count as u32,
+            &s.binding,
+        )?;
         let mut rigid = Vec::new();
         for k in &s.kinematic {
             for part in s.parts.iter().filter(|p| p.object == k.object) {

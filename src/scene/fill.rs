@@ -180,9 +180,34 @@ impl Voxels {
     }
 }
 
+/// Which voxels a fill turns into particles.
+#[derive(Clone, Copy)]
+enum Cover {
+    /// Solid voxels that hold no Gaussian's mean, at their centres: the interior beside
+    /// the Gaussians, which are particles themselves.
+    Interior,
+    /// Every solid voxel (and for a capture every voxel holding a mean or on the density's
+    /// surface band), moved off its centre by up to ±jitter·h/2 per axis: particles
+    /// standing for the whole object.
+    Solid { jitter: f64, seed: u64 },
+}
+
 /// Fill one object's interior. Errors only when the grid or the particle count would
 /// exceed the limits; everything odd in the Gaussians is reported in `warnings`.
 pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
+    cover(input, Cover::Interior)
+}
+
+/// Particles on a lattice of spacing h over the whole object (docs/method.md §5.7): one per
+/// solid voxel (for a capture also per voxel holding a Gaussian's mean or on the surface
+/// band), jittered by up to ±`jitter`·h/2 per axis
+/// (a hash of `seed` and the voxel: reproducible), volume h³ each. `nearest` names each
+/// point's nearest Gaussian in voxel steps, `volumes` is unused.
+pub fn lattice(input: &FillInput, jitter: f64, seed: u64) -> Result<Fill, FillError> {
+    cover(input, Cover::Solid { jitter, seed })
+}
+
+fn cover(input: &FillInput, cover: Cover) -> Result<Fill, FillError> {
     let h = input.spacing;
     if !(h.is_finite() && h > 0.0) {
         return Err(FillError::BadSpacing(h));
@@ -209,13 +234,20 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
     let solid = solid_voxels(input, &grid, &flags, &mut stats);
     stats.solid_voxels = solid.iter().filter(|s| **s).count();
 
-    // Fill voxels: solid, no Gaussian there, inside the selection.
+    let exact = matches!(input.inside, InsideTest::Exact { .. });
+    // Fill voxels: solid (and, for the interior, no Gaussian there), inside the selection.
     let fill_idx: Vec<usize> = (0..grid.len())
         .into_par_iter()
         .filter(|&idx| {
-            solid[idx]
-                && flags[idx].load(Relaxed) & MEAN == 0
-                && (input.region)(grid.centre(grid.coords(idx)))
+            let flag = flags[idx].load(Relaxed);
+            let taken = match cover {
+                Cover::Interior => solid[idx] && flag & MEAN == 0,
+                // An exact test is the solid; a capture's solid is its inside, its surface
+                // band and wherever its Gaussians are.
+                Cover::Solid { .. } if exact => solid[idx],
+                Cover::Solid { .. } => solid[idx] || flag & (MEAN | BAND) != 0,
+            };
+            taken && (input.region)(grid.centre(grid.coords(idx)))
         })
         .collect();
     if fill_idx.len() > MAX_FILL_PARTICLES {
@@ -227,7 +259,19 @@ pub fn fill(input: &FillInput) -> Result<Fill, FillError> {
     }
     out.points = fill_idx
         .iter()
-        .map(|&idx| grid.centre(grid.coords(idx)))
+        .map(|&idx| {
+            let centre = grid.centre(grid.coords(idx));
+            match cover {
+                Cover::Interior => centre,
+                Cover::Solid { jitter, seed } => {
+                    let mut r = crate::rng::SplitMix64::new(
+                        seed ^ (idx as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+                    );
+                    let d = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
+                    centre + d * (jitter * h)
+                }
+            }
+        })
         .collect();
 
     let by_voxel = share_volumes(&home, h, &mut out.volumes);

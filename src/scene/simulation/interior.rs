@@ -1,21 +1,35 @@
-//! The interior of a simulated object: its fill (`scene::fill`) run with the object's
-//! inside test and selection, and the fill particles' appearance (isotropic Gaussians
-//! coloured by their donor, or by a procedural asset's region colour).
+//! The solid of a simulated object: its fill or its particle lattice (`scene::fill`) run
+//! with the object's inside test and selection, and the fill's appearance (isotropic
+//! Gaussians coloured by their donor, or by a procedural asset's region colour).
 
 use super::*;
 
-/// Fill object `i`'s interior (its selected Gaussians `part`) at spacing `h`.
+/// What [`fill_object`] makes of an object's solid.
+#[derive(Clone, Copy)]
+pub(super) enum Cover {
+    /// `physics.fill`: points in the interior beside the Gaussians.
+    Interior,
+    /// `physics.particles`: a jittered lattice over all of it.
+    Lattice { jitter: f64 },
+}
+
+/// Fill object `i`'s solid (its selected Gaussians `part`) at spacing `h`, as `cover` says.
 pub(super) fn fill_object(
     scene: &Scene,
     i: usize,
     part: &Splats,
     h: f64,
     dx: f64,
+    cover: Cover,
 ) -> Result<crate::scene::fill::Fill, SceneError> {
-    use crate::scene::fill::{fill, FillInput, InsideTest, MAX_CLOSING_VOXELS};
+    use crate::scene::fill::{fill, lattice, FillInput, InsideTest, MAX_CLOSING_VOXELS};
     use crate::scene::physics::FillMode;
     let o = scene.origin.as_str();
-    let field = format!("objects[{i}].physics.fill.spacing");
+    let setting = match cover {
+        Cover::Interior => "fill",
+        Cover::Lattice { .. } => "particles",
+    };
+    let field = format!("objects[{i}].physics.{setting}.spacing");
     if !(h.is_finite() && h >= dx / 16.0 && h <= dx) {
         return Err(SceneError::invalid(
             o,
@@ -23,6 +37,16 @@ pub(super) fn fill_object(
             h,
             format!("a spacing in [Δx/16, Δx] = [{}, {dx}]", dx / 16.0),
         ));
+    }
+    if let Cover::Lattice { jitter } = cover {
+        if !(0.0..=1.0).contains(&jitter) {
+            return Err(SceneError::invalid(
+                o,
+                format!("objects[{i}].physics.particles.jitter"),
+                jitter,
+                "a share of the spacing in [0, 1]",
+            ));
+        }
     }
     let obj = &scene.objects[i];
     let physics = obj.physics.as_ref().expect("simulated");
@@ -85,18 +109,22 @@ pub(super) fn fill_object(
             }
         }
     };
-    fill(&FillInput {
+    let input = FillInput {
         means: &part.means,
         covariances: &part.covariances,
         opacities: &part.opacities,
         spacing: h,
         inside,
         region: &region,
-    })
+    };
+    match cover {
+        Cover::Interior => fill(&input),
+        Cover::Lattice { jitter } => lattice(&input, jitter, i as u64),
+    }
     .map_err(|e| {
         SceneError::invalid(
             o,
-            format!("objects[{i}].physics.fill.spacing"),
+            field,
             h,
             format!("a coarser spacing or a smaller selection: {e}"),
         )

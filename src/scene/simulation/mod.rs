@@ -1,8 +1,11 @@
 //! The scene file's simulation: the `simulation` block (grid, step, gravity, boundaries) and
 //! each object's `physics` (material, initial velocity), turned into what the MPM step
-//! needs (docs/method.md §1–§4). The selected Gaussians of a simulated object (`physics.select`,
-//! `physics.min_opacity`; default all) are particles, the rest of it stays static; with
-//! `physics.fill` its interior gets particles too (`scene::fill`).
+//! needs (docs/method.md §1–§5). The selected Gaussians of a simulated object
+//! (`physics.select`, `physics.min_opacity`; default all) move, the rest of it stays static.
+//! What moves them is `physics.particles`: a lattice over the object's solid, each Gaussian
+//! bound to its nearest particle (`derive::binding`; the default), or one particle per
+//! Gaussian. `physics.fill` adds the interior (`scene::fill`): particles beside the
+//! Gaussians in the second mode, Gaussians for the look in the first.
 
 use glam::DVec3;
 
@@ -14,6 +17,7 @@ use interior::*;
 use super::physics::{vec3, SelectSpec, SimulationSpec};
 use super::regions::{ObjectRegions, ParticleKey};
 use super::{BuildReport, Scene, SceneError};
+use crate::derive::Binding;
 use crate::render::Splats;
 use crate::sim::{
     cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams, Transfer,
@@ -29,6 +33,11 @@ pub struct SimulationSetup {
     /// (file order), then per simulated object its selected Gaussians and its fill. An
     /// object with a `select` or `min_opacity` has a static and a simulated run.
     pub parts: Vec<SplatPart>,
+    /// Which particle moves each simulated Gaussian (`splats[static_count..]`, in order) and
+    /// its rest offset from it.
+    pub binding: Binding,
+    /// Each simulated object's particles and Gaussians.
+    pub bodies: Vec<Body>,
     pub particles: Particles,
     pub grid: Grid,
     pub materials: Vec<Material>,
@@ -51,6 +60,18 @@ impl SimulationSetup {
     }
 }
 
+/// One simulated object: its particles (a run of [`SimulationSetup::particles`]) and its
+/// Gaussians (a run of [`SimulationSetup::splats`], selected ones then fill).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Body {
+    /// Index in `scene.objects`.
+    pub object: usize,
+    pub particles: Range<usize>,
+    pub gaussians: Range<usize>,
+    /// True when the particles are a lattice the Gaussians are bound to.
+    pub lattice: bool,
+}
+
 /// A run of one object's Gaussians in [`SimulationSetup::splats`].
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct SplatPart {
@@ -65,9 +86,9 @@ pub struct SplatPart {
 pub enum PartKind {
     /// Rendered as loaded (static objects, unselected Gaussians of simulated ones).
     Static,
-    /// Selected Gaussians of a simulated object, one particle each.
+    /// Selected Gaussians of a simulated object.
     Simulated,
-    /// Interior fill particles of a simulated object (isotropic Gaussians).
+    /// Interior fill of a simulated object (isotropic Gaussians).
     Fill,
 }
 
@@ -146,6 +167,8 @@ pub fn prepare(
         splats: out.splats,
         static_count,
         parts: out.parts,
+        binding: body.binding,
+        bodies: body.bodies,
         particles: body.particles,
         grid,
         materials: body.materials,
@@ -354,9 +377,11 @@ impl Parts {
     }
 }
 
-/// The simulated bodies as they are added: particles, materials, the CFL bound.
+/// The simulated bodies as they are added: particles, bindings, materials, the CFL bound.
 struct Bodies {
     particles: Particles,
+    binding: Binding,
+    bodies: Vec<Body>,
     materials: Vec<Material>,
     warnings: Vec<String>,
     dt_cfl: f64,
@@ -366,6 +391,8 @@ impl Default for Bodies {
     fn default() -> Self {
         Bodies {
             particles: Particles::new(),
+            binding: Binding::default(),
+            bodies: Vec::new(),
             materials: Vec::new(),
             warnings: Vec::new(),
             dt_cfl: f64::INFINITY,
@@ -375,7 +402,8 @@ impl Default for Bodies {
 
 impl Bodies {
     /// Object `i` with its selected Gaussians `part`: its materials (and regions'), its
-    /// fill, one particle per Gaussian and fill point, and its Gaussians into `out`.
+    /// particles (the lattice, or one per Gaussian and fill point), its fill, its Gaussians
+    /// into `out` and their binding.
     fn add(
         &mut self,
         scene: &Scene,
@@ -387,36 +415,49 @@ impl Bodies {
     ) -> Result<(), SceneError> {
         let o = scene.origin.as_str();
         let obj = &scene.objects[i];
+        let name = obj.display_name(i);
         let physics = obj.physics.as_ref().expect("simulated");
         let (m_index, density, regions) = self.add_materials(scene, i, &part, grid.dx, spec.cfl)?;
         let filled = match physics.fill.as_ref().and_then(|f| f.spacing(grid.dx)) {
             None => None,
-            Some(h) => Some(fill_object(scene, i, &part, h, grid.dx)?),
+            Some(h) => Some(fill_object(scene, i, &part, h, grid.dx, Cover::Interior)?),
         };
         let mut fill_splats = filled
             .as_ref()
             .map(|f| paint_asset_fill(obj, fill_gaussians(&part, f)))
             .unwrap_or_default();
+        let lattice = physics.particles.lattice(grid.dx);
+        let cloud = match lattice {
+            None => ParticleCloud::of_gaussians(obj, &part, filled.as_ref(), &fill_splats),
+            Some((h, jitter)) => {
+                let l = fill_object(scene, i, &part, h, grid.dx, Cover::Lattice { jitter })?;
+                self.warnings.extend(
+                    l.warnings.iter().map(|w| {
+                        let w = w.strip_prefix("fill: ").unwrap_or(w);
+                        format!("objects[{i}] ({name}): particle lattice: {w}")
+                    }),
+                );
+                ParticleCloud::of_lattice(obj, &part, &l, scene, i)?
+            }
+        };
         if let Some(f) = &filled {
-            let name = obj.display_name(i);
             self.warnings.extend(
                 f.warnings
                     .iter()
                     .map(|w| format!("objects[{i}] ({name}): {w}")),
             );
         }
-        let (xs, volumes) = positions_and_volumes(obj, &part, filled.as_ref());
-        let centre = if filled.is_some() {
+        let (xs, volumes) = (&cloud.x, &cloud.volume);
+        let centre = if filled.is_some() || lattice.is_some() {
             let total: f64 = volumes.iter().sum();
-            xs.iter().zip(&volumes).map(|(x, v)| *x * *v).sum::<DVec3>() / total.max(1e-300)
+            xs.iter().zip(volumes).map(|(x, v)| *x * *v).sum::<DVec3>() / total.max(1e-300)
         } else {
             part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>() / part.len().max(1) as f64
         };
         let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
-        let region = assign_regions(obj, &regions, &xs, &part, filled.as_ref(), &fill_splats);
-        recolour_fill(&mut fill_splats, &region[part.len()..], &regions);
+        let region = assign_regions(obj, &regions, &cloud, &part);
         let start = self.particles.len();
-        for ((x, volume), r) in xs.iter().zip(&volumes).zip(&region) {
+        for ((x, volume), r) in xs.iter().zip(volumes).zip(&region) {
             let x = *x;
             let (m_index, density) = match r {
                 None => (m_index, density),
@@ -427,8 +468,8 @@ impl Bodies {
                 return Err(SceneError::invalid(
                     o,
                     format!("objects[{i}]"),
-                    format!("a Gaussian at {x}"),
-                    format!("every simulated Gaussian inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
+                    format!("a particle at {x}"),
+                    format!("every simulated Gaussian and particle inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
                 ));
             }
             self.particles.push(
@@ -451,8 +492,35 @@ impl Bodies {
             self.particles.alpha[p] =
                 self.materials[self.particles.material[p] as usize].initial_alpha();
         }
+        let gaussians = part.len() + fill_splats.len();
+        let binding = match lattice {
+            None => Binding::identity(start as u32, gaussians),
+            Some((h, _)) => {
+                let means: Vec<glam::Vec3> = part
+                    .means
+                    .iter()
+                    .chain(&fill_splats.means)
+                    .copied()
+                    .collect();
+                Binding::nearest(&means, xs, start as u32, h)
+            }
+        };
+        // A fill Gaussian takes the colour of its particle's region.
+        let fill_region: Vec<Option<usize>> = binding.particle[part.len()..]
+            .iter()
+            .map(|&p| region[p as usize - start])
+            .collect();
+        recolour_fill(&mut fill_splats, &fill_region, &regions);
+        let first = out.splats.len();
         out.push(part, i, PartKind::Simulated);
         out.push(fill_splats, i, PartKind::Fill);
+        self.binding.append(binding);
+        self.bodies.push(Body {
+            object: i,
+            particles: start..self.particles.len(),
+            gaussians: first..out.splats.len(),
+            lattice: lattice.is_some(),
+        });
         Ok(())
     }
 
@@ -494,32 +562,81 @@ impl Bodies {
     }
 }
 
-/// Particle positions and rest volumes: the selected Gaussians, then the fill points.
-fn positions_and_volumes(
-    obj: &super::ObjectSpec,
-    part: &Splats,
-    filled: Option<&super::fill::Fill>,
-) -> (Vec<DVec3>, Vec<f64>) {
-    match filled {
-        None => {
-            let v = particle_volume(obj, part);
-            (
-                part.means.iter().map(|m| m.as_dvec3()).collect(),
-                vec![v; part.len()],
-            )
-        }
-        Some(f) => (
-            part.means
+/// An object's particles before they become [`Particles`]: positions, rest volumes, and
+/// what their regions are judged by.
+struct ParticleCloud {
+    x: Vec<DVec3>,
+    volume: Vec<f64>,
+    /// Each particle's label (empty: none carry one).
+    labels: Vec<u16>,
+    /// The Gaussian (of the object's selected ones) whose distance is a particle's depth
+    /// below a capture's surface; None for a particle that is a Gaussian (depth 0).
+    donor: Vec<Option<u32>>,
+}
+
+impl ParticleCloud {
+    /// One particle per selected Gaussian, then one per fill point.
+    fn of_gaussians(
+        obj: &super::ObjectSpec,
+        part: &Splats,
+        filled: Option<&super::fill::Fill>,
+        fill_splats: &Splats,
+    ) -> ParticleCloud {
+        let mut x: Vec<DVec3> = part.means.iter().map(|m| m.as_dvec3()).collect();
+        let mut donor = vec![None; part.len()];
+        let volume = match filled {
+            None => vec![particle_volume(obj, part); part.len()],
+            Some(f) => {
+                x.extend(f.points.iter().copied());
+                donor.extend(f.nearest.iter().map(|&d| Some(d)));
+                f.volumes
+                    .iter()
+                    .copied()
+                    .chain(std::iter::repeat_n(f.point_volume, f.points.len()))
+                    .collect()
+            }
+        };
+        let labels = if part.labels.is_empty() {
+            Vec::new()
+        } else {
+            part.labels
                 .iter()
-                .map(|m| m.as_dvec3())
-                .chain(f.points.iter().copied())
-                .collect(),
-            f.volumes
-                .iter()
+                .chain(&fill_splats.labels)
                 .copied()
-                .chain(std::iter::repeat_n(f.point_volume, f.points.len()))
-                .collect(),
-        ),
+                .collect()
+        };
+        ParticleCloud {
+            x,
+            volume,
+            labels,
+            donor,
+        }
+    }
+
+    /// The lattice `l` over the object: volume h³ each, the label of the asset's region
+    /// there or of the nearest Gaussian.
+    fn of_lattice(
+        obj: &super::ObjectSpec,
+        part: &Splats,
+        l: &super::fill::Fill,
+        scene: &Scene,
+        i: usize,
+    ) -> Result<ParticleCloud, SceneError> {
+        if l.points.is_empty() {
+            return Err(SceneError::invalid(
+                scene.origin.as_str(),
+                format!("objects[{i}].physics.particles.spacing"),
+                l.point_volume.cbrt(),
+                "a spacing that puts particles in the object (none landed in its solid)",
+            ));
+        }
+        let labels = paint_asset_fill(obj, fill_gaussians(part, l)).labels;
+        Ok(ParticleCloud {
+            x: l.points.clone(),
+            volume: vec![l.point_volume; l.points.len()],
+            labels,
+            donor: l.nearest.iter().map(|&d| Some(d)).collect(),
+        })
     }
 }
 
@@ -565,19 +682,17 @@ fn time_step(
     Ok((frame / steps_per_frame, steps_per_frame as u32))
 }
 
-/// Each particle's region (None: the object's own material). Particles are the selected
-/// Gaussians `part` then the fill points. Depth below the surface: for a procedural object
-/// from its exact solid (object depth × the transform's mean scale |det M|^(1/3), exact for
-/// uniform scales); for a PLY, a Gaussian is on the surface (depth 0) and a fill particle is
-/// as deep as the distance to its nearest Gaussian.
+/// Each particle's region (None: the object's own material). Depth below the surface: for
+/// a procedural object from its exact solid (object depth × the transform's mean scale
+/// |det M|^(1/3), exact for uniform scales); for a PLY, a Gaussian is on the surface
+/// (depth 0) and any other particle is as deep as the distance to its donor Gaussian.
 fn assign_regions(
     obj: &super::ObjectSpec,
     regions: &ObjectRegions,
-    xs: &[DVec3],
+    cloud: &ParticleCloud,
     part: &Splats,
-    filled: Option<&super::fill::Fill>,
-    fill_splats: &Splats,
 ) -> Vec<Option<usize>> {
+    let xs = &cloud.x;
     if regions.is_empty() {
         return vec![None; xs.len()];
     }
@@ -592,22 +707,18 @@ fn assign_regions(
         if let Some(spec) = &obj.procedural {
             return spec.depth((m_inv * (xs[p] - t)).to_array()) * scale;
         }
-        match (p.checked_sub(part.len()), filled) {
-            (Some(j), Some(f)) => xs[p].distance(part.means[f.nearest[j] as usize].as_dvec3()),
-            _ => 0.0,
-        }
+        cloud.donor[p].map_or(0.0, |d| xs[p].distance(part.means[d as usize].as_dvec3()))
     };
     (0..xs.len())
         .map(|p| {
             regions.region_of(&ParticleKey {
                 x: xs[p],
                 depth: depth(p),
-                label: match p.checked_sub(part.len()) {
-                    None => part.labels.get(p),
-                    Some(j) => fill_splats.labels.get(j),
-                }
-                .copied()
-                .filter(|&l| l != crate::splat::NO_LABEL),
+                label: cloud
+                    .labels
+                    .get(p)
+                    .copied()
+                    .filter(|&l| l != crate::splat::NO_LABEL),
             })
         })
         .collect()
