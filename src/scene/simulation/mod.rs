@@ -431,12 +431,10 @@ impl Bodies {
             None => ParticleCloud::of_gaussians(obj, &part, filled.as_ref(), &fill_splats),
             Some((h, jitter)) => {
                 let l = fill_object(scene, i, &part, h, grid.dx, Cover::Lattice { jitter })?;
-                self.warnings.extend(
-                    l.warnings.iter().map(|w| {
-                        let w = w.strip_prefix("fill: ").unwrap_or(w);
-                        format!("objects[{i}] ({name}): particle lattice: {w}")
-                    }),
-                );
+                self.warnings.extend(l.warnings.iter().map(|w| {
+                    let w = w.strip_prefix("fill: ").unwrap_or(w);
+                    format!("objects[{i}] ({name}): particle lattice: {w}")
+                }));
                 ParticleCloud::of_lattice(obj, &part, &l, scene, i)?
             }
         };
