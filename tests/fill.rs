@@ -405,7 +405,7 @@ fn selection_splits_an_object_into_static_and_simulated() {
 
 /// Scene-file errors name the field.
 #[test]
-fn bad_select_and_fill_name_the_field() {
+fn bad_select_fill_and_particles_name_the_field() {
     let dir = tempfile::tempdir().unwrap();
     let proc = r#""procedural": { "shape": "sphere", "radius": 0.1, "spacing": 0.03, "color": [1, 0, 0] }, "transform": { "translate": [0.5, 0.5, 0.5] }"#;
     let cases = [
@@ -435,6 +435,22 @@ fn bad_select_and_fill_name_the_field() {
             "physics.fill: unknown field `spcing`",
         ),
         (r#""fill": "yes""#, "physics.fill: expected true, false"),
+        (
+            r#""particles": { "spacing": 0.5 }"#,
+            "objects[0].physics.particles.spacing",
+        ),
+        (
+            r#""particles": { "spacing": 0.01, "jitter": 2 }"#,
+            "objects[0].physics.particles.jitter",
+        ),
+        (
+            r#""particles": "each""#,
+            r#"physics.particles: expected "gaussians" or {"spacing": h}"#,
+        ),
+        (
+            r#""particles": { "spaceing": 0.01 }"#,
+            "physics.particles: unknown field `spaceing`",
+        ),
     ];
     for (extra, field) in cases {
         let obj = format!(r#"{{ {proc}, "physics": {{ {MATERIAL}, {extra} }} }}"#);
