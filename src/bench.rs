@@ -297,66 +297,199 @@ fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Resu
     })
 }
 
-/// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step with a NACC
-/// material (the paper's fruit parameters), for 20k particles on a 64³ grid and (unless
-/// `quick`) 1M particles on a 128³ grid; plus GPU memory per particle. With `per_pass`, each
-/// case is also broken down by pass.
+/// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step, with a NACC
+/// material (the paper's fruit parameters) and with fixed corotated (the peers' usual
+/// material), for 20k particles on a 64³ grid and (unless `quick`) 1M particles on a 128³
+/// grid; plus GPU memory per particle. With `per_pass`, each case is also broken down by
+/// pass. With `peer`, the 20k fixed-corotated case is also stepped by that peer in the same
+/// run, and the ratios printed.
 pub fn sim_bench(
     gpu: &GpuContext,
     steps: u32,
     quick: bool,
     per_pass: bool,
+    peer: Option<Peer>,
     out: &mut dyn Write,
 ) -> Result<()> {
     writeln!(out, "adapter: {}", gpu.describe())?;
     writeln!(
         out,
-        "{:>10} {:>6} {:>7} {:>6} {:>10} {:>16} {:>14}",
-        "particles", "grid", "p2g", "steps", "ms/step", "ns/particle-step", "bytes/particle"
+        "{:>10} {:>6} {:>16} {:>7} {:>6} {:>10} {:>16} {:>14}",
+        "particles",
+        "grid",
+        "material",
+        "p2g",
+        "steps",
+        "ms/step",
+        "ns/particle-step",
+        "bytes/particle"
     )?;
     let mut cases = vec![(20_000usize, 64u32)];
     if !quick {
         cases.push((1_000_000, 128));
     }
-    for (n, cells) in cases {
-        let case = SimCase::new(n, cells);
-        for path in sim_paths(gpu) {
-            let (sim, t) = time_sim(gpu, &case, path, steps)?;
+    let mut small = Vec::new();
+    for (k, (n, cells)) in cases.into_iter().enumerate() {
+        for model in [SimModel::Nacc, SimModel::FixedCorotated] {
+            let case = SimCase::with_model(n, cells, model);
+            for path in sim_paths(gpu) {
+                let (sim, t) = time_sim(gpu, &case, path, steps)?;
+                writeln!(
+                    out,
+                    "{:>10} {:>5}³ {:>16} {:>7} {:>6} {:>10.2} {:>16.1} {:>14.0}",
+                    t.particles,
+                    cells,
+                    model.name(),
+                    t.p2g,
+                    steps,
+                    t.ms_per_step,
+                    t.ns_per_particle_step,
+                    t.gpu_bytes as f64 / t.particles as f64
+                )?;
+                if per_pass {
+                    write_passes(gpu, &sim, steps, out)?;
+                }
+                out.flush()?;
+                if k == 0 {
+                    small.push((model, t));
+                }
+            }
+        }
+    }
+    if let Some(peer) = peer {
+        let case = SimCase::with_model(20_000, 64, SimModel::FixedCorotated);
+        let (line, peer_ms) = peer.run(&case, steps)?;
+        writeln!(out, "peer: {line}: {peer_ms:.2} ms/step")?;
+        for (model, t) in &small {
             writeln!(
                 out,
-                "{:>10} {:>5}³ {:>7} {:>6} {:>10.2} {:>16.1} {:>14.0}",
-                t.particles,
-                cells,
+                "peer ratio: splatter {} {} / {} fixed_corotated = {:.2}",
+                model.name(),
                 t.p2g,
-                steps,
-                t.ms_per_step,
-                t.ns_per_particle_step,
-                t.gpu_bytes as f64 / t.particles as f64
+                peer.name(),
+                t.ms_per_step / peer_ms
             )?;
-            if per_pass {
-                let active = sim.active_blocks(gpu)?.len();
-                let blocks = sim.blocks();
-                writeln!(
-                    out,
-                    "{:>22} active blocks of 4³ nodes: {active} of {blocks}",
-                    ""
-                )?;
-                let list: Vec<String> = sim
-                    .profile_passes(gpu, steps)?
-                    .iter()
-                    .map(|(name, ms)| format!("{name} {ms:.2}"))
-                    .collect();
-                writeln!(
-                    out,
-                    "{:>22} per pass (ms per step, each waited for): {}",
-                    "",
-                    list.join(", ")
-                )?;
-            }
-            out.flush()?;
         }
     }
     Ok(())
+}
+
+/// The active blocks and the per-pass times of one case.
+fn write_passes(
+    gpu: &GpuContext,
+    sim: &crate::sim::gpu::GpuSim,
+    steps: u32,
+    out: &mut dyn Write,
+) -> Result<()> {
+    let active = sim.active_blocks(gpu)?.len();
+    let blocks = sim.blocks();
+    writeln!(
+        out,
+        "{:>22} active blocks of 4³ nodes: {active} of {blocks}",
+        ""
+    )?;
+    let list: Vec<String> = sim
+        .profile_passes(gpu, steps)?
+        .iter()
+        .map(|(name, ms)| format!("{name} {ms:.2}"))
+        .collect();
+    writeln!(
+        out,
+        "{:>22} per pass (ms per step, each waited for): {}",
+        "",
+        list.join(", ")
+    )?;
+    Ok(())
+}
+
+/// Another MPM code that `bench sim --peer` runs on the same case in the same run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Peer {
+    /// Taichi on the CPU (`benches/peers/taichi_mpm.py`; `pip install taichi==1.7.4`).
+    Taichi,
+}
+
+impl Peer {
+    fn name(self) -> &'static str {
+        match self {
+            Peer::Taichi => "taichi",
+        }
+    }
+
+    /// The peer's script, next to the sources this program was built from.
+    fn script(self) -> std::path::PathBuf {
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/peers/taichi_mpm.py")
+    }
+
+    /// Step `case` (a fixed-corotated cube) `steps` times in the peer: its description and
+    /// its milliseconds per step.
+    fn run(self, case: &SimCase, steps: u32) -> Result<(String, f64)> {
+        let script = self.script();
+        if !script.is_file() {
+            anyhow::bail!(
+                "--peer {}: {} not found (it ships with the sources)",
+                self.name(),
+                script.display()
+            );
+        }
+        let p = &case.particles;
+        let per_axis = (p.len() as f64).cbrt().round() as usize;
+        let spacing = case.grid.dx / 2.0;
+        let lo = p.x[0] - glam::DVec3::splat(spacing / 2.0);
+        let (e, nu) = (SimCase::E, SimCase::NU);
+        let args: Vec<String> = [
+            "--per-axis".into(),
+            per_axis.to_string(),
+            "--cells".into(),
+            case.cells.to_string(),
+            "--lo".into(),
+            lo.x.to_string(),
+            lo.y.to_string(),
+            lo.z.to_string(),
+            "--dt".into(),
+            case.params.dt.to_string(),
+            "--steps".into(),
+            steps.to_string(),
+            "--E".into(),
+            e.to_string(),
+            "--nu".into(),
+            nu.to_string(),
+            "--density".into(),
+            SimCase::DENSITY.to_string(),
+        ]
+        .into();
+        let output = std::process::Command::new("python3")
+            .arg(&script)
+            .args(&args)
+            .output()
+            .map_err(|e| anyhow::anyhow!("--peer {}: cannot run python3: {e}", self.name()))?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        if !output.status.success() {
+            let last = stderr.lines().last().unwrap_or("no message");
+            anyhow::bail!(
+                "--peer {}: {} failed: {last} (pip install taichi==1.7.4)",
+                self.name(),
+                script.display()
+            );
+        }
+        let ms = stdout
+            .lines()
+            .find_map(|l| l.strip_prefix("ms/step: "))
+            .and_then(|v| v.trim().parse::<f64>().ok())
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--peer {}: no `ms/step:` line in its output: {stdout}",
+                    self.name()
+                )
+            })?;
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with(self.name()))
+            .unwrap_or(self.name())
+            .to_string();
+        Ok((line, ms))
+    }
 }
 
 /// The P2G paths `gpu` can run: the sorted gather everywhere, the float-atomic scatter
@@ -370,9 +503,27 @@ pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
     paths
 }
 
-/// The simulation benchmark's input: a NACC cube (the paper's fruit parameters,
-/// `continuous` k = 2) of 8 particles per cell falling onto a sticky ground in a unit
-/// domain of `cells`³ cells: contact, plasticity and free flight in one run.
+/// The material of a simulation benchmark case.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimModel {
+    /// NACC with the paper's fruit parameters, `continuous` k = 2.
+    Nacc,
+    /// Fixed corotated with the same E and ν (what MPM peers run).
+    FixedCorotated,
+}
+
+impl SimModel {
+    pub fn name(self) -> &'static str {
+        match self {
+            SimModel::Nacc => "nacc",
+            SimModel::FixedCorotated => "fixed_corotated",
+        }
+    }
+}
+
+/// The simulation benchmark's input: a cube (NACC with the paper's fruit parameters, or
+/// fixed corotated) of 8 particles per cell falling onto a sticky ground in a unit domain of
+/// `cells`³ cells: contact, plasticity and free flight in one run.
 pub struct SimCase {
     pub particles: crate::sim::Particles,
     pub grid: crate::sim::Grid,
@@ -382,32 +533,46 @@ pub struct SimCase {
 }
 
 impl SimCase {
-    /// About `n` particles on a `cells`³ grid.
+    /// Young's modulus, Poisson ratio and density of every case.
+    pub const E: f64 = 2000.0;
+    pub const NU: f64 = 0.4;
+    pub const DENSITY: f64 = 2.0;
+
+    /// About `n` NACC particles on a `cells`³ grid.
     pub fn new(n: usize, cells: u32) -> SimCase {
+        Self::with_model(n, cells, SimModel::Nacc)
+    }
+
+    /// About `n` particles of `model` on a `cells`³ grid.
+    pub fn with_model(n: usize, cells: u32, model: SimModel) -> SimCase {
         use crate::sim::nacc::{Case3Variant, NaccParams};
         use crate::sim::{
             cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams,
             Transfer,
         };
         use glam::DVec3;
-        let material = Material::Nacc {
-            params: NaccParams {
-                e: 2000.0,
-                nu: 0.4,
-                alpha0: -0.04,
-                beta: 1.0,
-                xi: 2.0,
-                m_slope: 2.36,
+        let material = match model {
+            SimModel::Nacc => Material::Nacc {
+                params: NaccParams {
+                    e: Self::E,
+                    nu: Self::NU,
+                    alpha0: -0.04,
+                    beta: 1.0,
+                    xi: 2.0,
+                    m_slope: 2.36,
+                },
+                variant: Case3Variant::Continuous { k: 2.0 },
             },
-            variant: Case3Variant::Continuous { k: 2.0 },
+            SimModel::FixedCorotated => Material::fixed_corotated(Self::E, Self::NU),
         };
         let dx = 1.0 / f64::from(cells);
         let side = (n as f64 / 8.0).cbrt() * dx;
         let lo = DVec3::new(0.5 - side / 2.0, 0.1, 0.5 - side / 2.0);
-        let mut particles = Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, 2.0);
+        let mut particles =
+            Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, Self::DENSITY);
         particles.set_material(0, &material);
         let params = StepParams {
-            dt: cfl_dt(&material, 2.0, dx, 0.4).min(1e-4),
+            dt: cfl_dt(&material, Self::DENSITY, dx, 0.4).min(1e-4),
             gravity: DVec3::new(0.0, -9.8, 0.0),
             boundaries: Boundaries {
                 walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),

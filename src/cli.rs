@@ -67,6 +67,10 @@ pub(crate) enum BenchWhat {
         /// Also break each case down by pass (each pass run alone and waited for).
         #[arg(long)]
         per_pass: bool,
+        /// Also step the 20k fixed-corotated case in a peer, in the same run, and print the
+        /// ratios (taichi: `benches/peers/taichi_mpm.py`, needs `pip install taichi==1.7.4`).
+        #[arg(long, value_enum)]
+        peer: Option<splatter::bench::Peer>,
     },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.
     Render {

@@ -60,10 +60,12 @@ fn run(cli: Cli) -> Result<()> {
                     steps,
                     quick,
                     per_pass,
+                    peer,
                 },
         }) => {
             let gpu = GpuContext::new(cli.backend)?;
-            splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, &mut std::io::stdout())
+            let out = &mut std::io::stdout();
+            splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, peer, out)
         }
         Some(Command::Bench {
             what:
