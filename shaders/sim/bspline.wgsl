@@ -47,15 +47,22 @@ fn bspline_stencil(x: vec3<f32>, inv_dx: f32) -> BsplineStencil {
 
 // Weight w_ip of node base + off, off ∈ {0,1,2}³.
 fn bspline_weight(s: BsplineStencil, off: vec3<u32>) -> f32 {
-    return s.w[off.x].x * s.w[off.y].y * s.w[off.z].z;
+    let w = bspline_pick(s.w[0], s.w[1], s.w[2], off);
+    return w.x * w.y * w.z;
+}
+
+// (a[off.x].x, a[off.y].y, a[off.z].z) of the three per-axis values a0, a1, a2. Selects
+// rather than an index: a runtime index into a local array sends it to memory on CPU
+// drivers (lavapipe), and this runs 27 times per particle in every transfer.
+fn bspline_pick(a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>, off: vec3<u32>) -> vec3<f32> {
+    return select(select(a0, a1, off == vec3<u32>(1u)), a2, off == vec3<u32>(2u));
 }
 
 // Gradient ∇_x w_ip of node base + off with respect to the particle position.
 fn bspline_weight_grad(s: BsplineStencil, off: vec3<u32>, inv_dx: f32) -> vec3<f32> {
-    let wa = s.w[off.x].x;
-    let wb = s.w[off.y].y;
-    let wc = s.w[off.z].z;
-    return vec3<f32>(s.dw[off.x].x * wb * wc, wa * s.dw[off.y].y * wc, wa * wb * s.dw[off.z].z) * inv_dx;
+    let w = bspline_pick(s.w[0], s.w[1], s.w[2], off);
+    let dw = bspline_pick(s.dw[0], s.dw[1], s.dw[2], off);
+    return vec3<f32>(dw.x * w.y * w.z, w.x * dw.y * w.z, w.x * w.y * dw.z) * inv_dx;
 }
 
 // Offset d_ip = i·Δx − x_p of node base + off from the particle.
