@@ -14,9 +14,13 @@ use glam::DVec3;
 
 /// The fragment sizes (particle counts) of `points`, largest first.
 pub fn fragment_sizes(points: &[DVec3], link: f64) -> Vec<usize> {
-    let ids = fragment_ids(points, link);
+    sizes_of(&fragment_ids(points, link))
+}
+
+/// The fragment sizes of [`fragment_ids`]' numbering, largest first.
+pub fn sizes_of(ids: &[u32]) -> Vec<usize> {
     let mut sizes = vec![0; ids.iter().max().map_or(0, |&m| m as usize + 1)];
-    for &f in &ids {
+    for &f in ids {
         sizes[f as usize] += 1;
     }
     sizes

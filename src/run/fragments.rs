@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 
 use crate::derive::binding::{bound_mean, Binding};
-use crate::fragments::{fragment_ids, FragmentSummary, PIECE_SHARE};
+use crate::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
 use crate::render::splats::mat3_from_sym3;
 use crate::scene::simulation::{Body, SimulationSetup};
 use crate::scene::Scene;
@@ -52,7 +52,14 @@ struct GaussianFragments {
 }
 
 impl GaussianFragments {
-    fn new(body: &Body, ids: &[u32], state: &Particles, s: &SimulationSetup) -> Self {
+    /// `points` are the body's particles now, `ids` their fragments.
+    fn new(
+        body: &Body,
+        points: &[DVec3],
+        ids: &[u32],
+        state: &Particles,
+        s: &SimulationSetup,
+    ) -> Self {
         let first = body.particles.start;
         let bound = |g: usize| {
             let k = g - s.static_count;
@@ -76,8 +83,7 @@ impl GaussianFragments {
             }
             means.push(bound_mean(state.x[p], f, offset).as_vec3());
         }
-        let points: Vec<DVec3> = body.particles.clone().map(|i| state.x[i]).collect();
-        let nearest = Binding::nearest(&means, &points, 0, s.grid.dx);
+        let nearest = Binding::nearest(&means, points, 0, s.grid.dx);
         let astray = body
             .gaussians
             .clone()
@@ -147,12 +153,8 @@ impl FragmentLog {
                 .count();
             let height = height_extent(&points);
             let ids = fragment_ids(&points, s.grid.dx);
-            let mut sizes = vec![0; ids.iter().max().map_or(0, |&m| m as usize + 1)];
-            for &f in &ids {
-                sizes[f as usize] += 1;
-            }
-            let look = GaussianFragments::new(body, &ids, state, s);
-            let summary = FragmentSummary::new(&sizes, PIECE_SHARE)
+            let look = GaussianFragments::new(body, &points, &ids, state, s);
+            let summary = FragmentSummary::new(&sizes_of(&ids), PIECE_SHARE)
                 .with_gaussians(look.gaussians, look.largest_share);
             let name = scene.objects[body.object]
                 .name

@@ -68,8 +68,6 @@ pub struct Body {
     pub object: usize,
     pub particles: Range<usize>,
     pub gaussians: Range<usize>,
-    /// True when the particles are a lattice the Gaussians are bound to.
-    pub lattice: bool,
 }
 
 /// A run of one object's Gaussians in [`SimulationSetup::splats`].
@@ -517,7 +515,6 @@ impl Bodies {
             object: i,
             particles: start..self.particles.len(),
             gaussians: first..out.splats.len(),
-            lattice: lattice.is_some(),
         });
         Ok(())
     }
