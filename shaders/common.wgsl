@@ -46,7 +46,8 @@ struct Frame {
     sh_degree: u32,
     // capacity of the tile-key buffers (entries)
     key_capacity: u32,
-    _pad0: u32,
+    // log2 of the records per page of the per-Gaussian arrays (gpu::pages)
+    page_shift: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -112,4 +113,12 @@ fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32
         min(conic_min_on_segment(d, vec2<f32>(0.0, span), conic),
             conic_min_on_segment(d + vec2<f32>(span, 0.0), vec2<f32>(0.0, span), conic)));
     return m <= k2;
+}
+
+// The Gaussians one dispatch of a per-Gaussian pass covers. Per-Gaussian arrays may exceed
+// one storage binding (gpu::pages): such a pass is dispatched once per page, over windows of
+// the arrays that start at Gaussian `base`, and runs for the local indices 0..count.
+struct PageRange {
+    base: u32,
+    count: u32,
 }

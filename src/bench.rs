@@ -402,6 +402,153 @@ fn write_passes(
     Ok(())
 }
 
+/// Peak resident memory of this process (`VmHWM`), in bytes, where the OS reports it. On a
+/// CPU driver (lavapipe) GPU buffers live in it too.
+pub fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+fn gib(bytes: u64) -> f64 {
+    bytes as f64 / f64::from(1u32 << 30)
+}
+
+/// `splatter bench sim --particles N`: one NACC step of about `n` particles on a grid sized
+/// to hold them, on the atomic path where the adapter has float atomics (it steps particle
+/// arrays larger than one storage binding, page by page); wall time, GPU bytes per particle,
+/// peak memory, and the most particles this adapter's buffer limits allow.
+pub fn sim_scale_bench(gpu: &GpuContext, n: usize, steps: u32, out: &mut dyn Write) -> Result<()> {
+    use crate::sim::gpu::{GpuSim, P2gPath};
+    writeln!(out, "adapter: {}", gpu.describe())?;
+    let binding = gpu.limits.max_storage_buffer_binding_size;
+    let buffer = gpu.limits.max_buffer_size;
+    writeln!(
+        out,
+        "limits: storage binding {} MiB, buffer {} MiB: at most {} particles on the atomic path (paged), {} on the gather path (one binding)",
+        binding >> 20,
+        buffer >> 20,
+        buffer / 48,
+        binding.min(buffer) / 48
+    )?;
+    // 8 particles per cell in a cube that fills 3/4 of the domain's side.
+    let side = (n as f64 / 8.0).cbrt();
+    let cells = ((side / 0.75 / 16.0).ceil() * 16.0) as u32;
+    let start = Instant::now();
+    let case = SimCase::with_model(n, cells.max(16), SimModel::Nacc);
+    let np = case.particles.len();
+    let path = P2gPath::best(gpu);
+    let pages = GpuSim::pages_for(gpu, np);
+    let sim = GpuSim::with_pages(
+        gpu,
+        &case.particles,
+        &case.grid,
+        &[case.material],
+        &case.params,
+        path,
+        pages,
+    )?;
+    drop(case);
+    gpu.wait()?;
+    let setup_s = start.elapsed().as_secs_f64();
+    writeln!(
+        out,
+        "{np} particles, {cells}³ grid, {} P2G, {} page(s) of {} particles; setup (sample, upload) {setup_s:.1} s",
+        path.name(),
+        pages.count,
+        pages.size
+    )?;
+    out.flush()?;
+    let start = Instant::now();
+    sim.step(gpu, 1)?;
+    gpu.wait()?;
+    let first = start.elapsed().as_secs_f64();
+    let start = Instant::now();
+    sim.step(gpu, steps)?;
+    gpu.wait()?;
+    let secs = start.elapsed().as_secs_f64() / f64::from(steps);
+    let w = sim.take_watchdog(gpu)?;
+    writeln!(
+        out,
+        "first step {first:.2} s; then {secs:.2} s/step ({:.1} ns/particle-step) over {steps}; watchdog: {} non-finite, {} escaped, pool overflow {}",
+        secs * 1e9 / np as f64,
+        w.nonfinite,
+        w.escaped,
+        w.pool_overflow
+    )?;
+    writeln!(
+        out,
+        "GPU buffers {:.2} GiB ({:.0} bytes/particle); peak memory of the process {}",
+        gib(sim.gpu_bytes()),
+        sim.gpu_bytes() as f64 / np as f64,
+        peak_memory().map_or("unknown".into(), |b| format!("{:.2} GiB", gib(b)))
+    )?;
+    Ok(())
+}
+
+/// `splatter bench render --gaussians N`: one 1920×1080 frame of `n` synthetic SH-3
+/// Gaussians (arrays past one storage binding are projected and read page by page): wall
+/// time, tile pairs, GPU bytes per Gaussian, peak memory, and the most Gaussians this
+/// adapter's limits allow.
+pub fn render_scale_bench(
+    gpu: &GpuContext,
+    n: usize,
+    repeat: usize,
+    out: &mut dyn Write,
+) -> Result<()> {
+    writeln!(out, "adapter: {}", gpu.describe())?;
+    let most = GpuRenderer::most_gaussians(gpu);
+    writeln!(
+        out,
+        "limits: storage binding {} MiB, buffer {} MiB: at most {most} Gaussians",
+        gpu.limits.max_storage_buffer_binding_size >> 20,
+        gpu.limits.max_buffer_size >> 20
+    )?;
+    let start = Instant::now();
+    let splats = Synthetic::capture_like(n, 3, 7).build();
+    let mut renderer = GpuRenderer::new(gpu);
+    renderer.upload(gpu, &splats)?;
+    drop(splats);
+    gpu.wait()?;
+    let pages = GpuRenderer::pages_for(gpu, n)?;
+    writeln!(
+        out,
+        "{n} Gaussians (SH degree 3), {} page(s) of {}; setup (generate, upload) {:.1} s",
+        pages.count,
+        pages.size,
+        start.elapsed().as_secs_f64()
+    )?;
+    let camera = Camera::look_at(
+        Vec3::new(0.0, -2.6, 0.9),
+        Vec3::ZERO,
+        Vec3::Z,
+        50f32.to_radians(),
+        1920,
+        1080,
+    );
+    let t = time_render(gpu, &mut renderer, &camera, repeat)?;
+    let (image, _) = renderer.render_timed(gpu, &camera, Vec3::ZERO)?;
+    writeln!(
+        out,
+        "1920x1080: render {:.0} ms, readback {:.1} ms, png {:.0} ms (medians of {repeat}); {} visible, {} tile pairs, {} dropped",
+        t.render_ms,
+        t.readback_ms,
+        t.png_ms,
+        image.stats.visible,
+        image.stats.intersections,
+        image.dropped_intersections
+    )?;
+    writeln!(
+        out,
+        "GPU buffers {:.2} GiB ({:.0} bytes/Gaussian); peak memory of the process {}",
+        gib(renderer.gpu_bytes()),
+        renderer.gpu_bytes() as f64 / n as f64,
+        peak_memory().map_or("unknown".into(), |b| format!("{:.2} GiB", gib(b)))
+    )?;
+    Ok(())
+}
+
 /// Another MPM code that `bench sim --peer` runs on the same case in the same run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Peer {

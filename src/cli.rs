@@ -71,6 +71,11 @@ pub(crate) enum BenchWhat {
         /// ratios (taichi: `benches/peers/taichi_mpm.py`, needs `pip install taichi==1.7.4`).
         #[arg(long, value_enum)]
         peer: Option<splatter::bench::Peer>,
+        /// Instead, step one NACC case of about this many particles (a cube, 8 per cell, on
+        /// a grid sized to hold it): arrays past one storage binding run page by page; wall
+        /// time, bytes per particle, peak memory and the adapter's largest size.
+        #[arg(long, conflicts_with_all = ["quick", "per_pass", "peer"])]
+        particles: Option<usize>,
     },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.
     Render {
@@ -83,6 +88,11 @@ pub(crate) enum BenchWhat {
         /// Also break each case down by pass (one extra frame, each pass waited for).
         #[arg(long)]
         per_pass: bool,
+        /// Instead, render one 1920×1080 frame of this many synthetic SH-3 Gaussians: arrays
+        /// past one storage binding run page by page; wall time, bytes per Gaussian, peak
+        /// memory and the adapter's largest size.
+        #[arg(long, conflicts_with_all = ["quick", "per_pass"])]
+        gaussians: Option<usize>,
     },
     /// Seconds to read splat files of any format (the file is read from the page cache:
     /// decoding, not the disk, is measured).

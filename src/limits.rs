@@ -3,11 +3,30 @@
 //! reduce, instead of a validation error (or an out-of-memory abort) midway.
 //!
 //! The byte counts mirror the allocations of [`GpuSim`](crate::sim::gpu::GpuSim) and
-//! [`GpuRenderer`](crate::render::GpuRenderer); each buffer must fit one storage binding
-//! ([`GpuContext::max_binding`]: `max_storage_buffer_binding_size` and `max_buffer_size`).
+//! [`GpuRenderer`](crate::render::GpuRenderer). An array that its passes read in pages
+//! ([`crate::gpu::pages`]) must fit one buffer (`max_buffer_size`); any other must fit one
+//! storage binding ([`GpuContext::max_binding`]).
 
 use crate::gpu::GpuContext;
 use glam::UVec3;
+
+/// What a buffer must fit in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fit {
+    /// One storage binding: its passes bind it whole.
+    Binding,
+    /// One buffer: its passes bind it in pages.
+    Buffer,
+}
+
+impl Fit {
+    fn place(self) -> &'static str {
+        match self {
+            Fit::Binding => "one GPU storage binding",
+            Fit::Buffer => "one GPU buffer",
+        }
+    }
+}
 
 /// One buffer a run will allocate.
 #[derive(Clone, Debug, PartialEq)]
@@ -15,12 +34,14 @@ pub struct Need {
     pub what: String,
     pub bytes: u64,
     pub advice: &'static str,
+    pub fit: Fit,
 }
 
 #[derive(Debug, thiserror::Error, PartialEq)]
-#[error("{what} needs {bytes} bytes ({mib:.1} MiB) in one GPU buffer, but {adapter} allows at most {limit} bytes ({limit_mib:.1} MiB); {advice}", mib = *bytes as f64 / 1048576.0, limit_mib = *limit as f64 / 1048576.0)]
+#[error("{what} needs {bytes} bytes ({mib:.1} MiB) in {place}, but {adapter} allows at most {limit} bytes ({limit_mib:.1} MiB); {advice}", mib = *bytes as f64 / 1048576.0, limit_mib = *limit as f64 / 1048576.0)]
 pub struct LimitError {
     pub what: String,
+    pub place: &'static str,
     pub bytes: u64,
     pub limit: u64,
     pub adapter: String,
@@ -44,21 +65,25 @@ pub fn render_needs(gaussians: usize, width: u32, height: u32) -> Vec<Need> {
             what: format!("the Gaussian records of {n} Gaussians"),
             bytes: n * record,
             advice: FEWER_GAUSSIANS,
+            fit: Fit::Buffer,
         },
         Need {
             what: format!("the SH coefficients of {n} Gaussians"),
             bytes: n * sh_bytes,
             advice: FEWER_GAUSSIANS,
+            fit: Fit::Buffer,
         },
         Need {
             what: format!("the projected Gaussians of {n} Gaussians"),
             bytes: n * 48,
             advice: FEWER_GAUSSIANS,
+            fit: Fit::Buffer,
         },
         Need {
             what: format!("a {width}×{height} image"),
             bytes: u64::from(width) * u64::from(height) * 4,
             advice: SMALLER_IMAGE,
+            fit: Fit::Binding,
         },
     ]
 }
@@ -74,6 +99,7 @@ pub fn sim_needs(particles: usize, cells: UVec3) -> Vec<Need> {
             what: format!("the deformation gradients of {n} particles"),
             bytes: n * 48,
             advice: FEWER_PARTICLES,
+            fit: Fit::Buffer,
         },
         Need {
             what: format!(
@@ -84,32 +110,63 @@ pub fn sim_needs(particles: usize, cells: UVec3) -> Vec<Need> {
             ),
             bytes: nodes * 16,
             advice: SMALLER_GRID,
+            fit: Fit::Binding,
         },
         Need {
             what: format!("the cell ranges of {cell_count} grid cells"),
             bytes: (cell_count + 1) * 8,
             advice: SMALLER_GRID,
+            fit: Fit::Binding,
         },
     ]
 }
 
-/// The derive pass's rest records ([`RestGaussian`](crate::derive::RestGaussian): rest
-/// look and binding) of `gaussians` simulated Gaussians.
-pub fn derive_needs(gaussians: usize) -> Vec<Need> {
+/// The derive pass's buffers, which it binds whole: the rest records
+/// ([`RestGaussian`](crate::derive::RestGaussian): rest look and binding) of `gaussians`
+/// simulated Gaussians, the state of the `particles` they are bound to, and the records of
+/// the `rendered` Gaussians it writes into.
+pub fn derive_needs(gaussians: usize, particles: usize, rendered: usize) -> Vec<Need> {
+    if gaussians == 0 {
+        return Vec::new(); // nothing to derive
+    }
     let record = std::mem::size_of::<crate::derive::RestGaussian>() as u64;
-    vec![Need {
-        what: format!("the rest records of {gaussians} simulated Gaussians"),
-        bytes: gaussians as u64 * record,
-        advice: FEWER_SIMULATED,
-    }]
+    let out = std::mem::size_of::<crate::render::gpu::layout::GaussianIn>() as u64;
+    vec![
+        Need {
+            what: format!("the rest records of {gaussians} simulated Gaussians"),
+            bytes: gaussians as u64 * record,
+            advice: FEWER_SIMULATED,
+            fit: Fit::Binding,
+        },
+        Need {
+            what: format!(
+                "the deformation gradients of {particles} particles, which the derive pass reads"
+            ),
+            bytes: particles as u64 * 48,
+            advice: FEWER_PARTICLES,
+            fit: Fit::Binding,
+        },
+        Need {
+            what: format!("the records of {rendered} Gaussians, which the derive pass writes"),
+            bytes: rendered as u64 * out,
+            advice: FEWER_GAUSSIANS,
+            fit: Fit::Binding,
+        },
+    ]
 }
 
-/// The first need above `limit`, as an error naming `adapter`.
-pub fn check(needs: &[Need], limit: u64, adapter: &str) -> Result<(), LimitError> {
+/// The first need above its limit (`binding` or `buffer` bytes), as an error naming
+/// `adapter`.
+pub fn check(needs: &[Need], binding: u64, buffer: u64, adapter: &str) -> Result<(), LimitError> {
     for need in needs {
+        let limit = match need.fit {
+            Fit::Binding => binding.min(buffer),
+            Fit::Buffer => buffer,
+        };
         if need.bytes > limit {
             return Err(LimitError {
                 what: need.what.clone(),
+                place: need.fit.place(),
                 bytes: need.bytes,
                 limit,
                 adapter: adapter.to_owned(),
@@ -122,7 +179,12 @@ pub fn check(needs: &[Need], limit: u64, adapter: &str) -> Result<(), LimitError
 
 /// [`check`] against `gpu`'s limits.
 pub fn check_gpu(gpu: &GpuContext, needs: &[Need]) -> Result<(), LimitError> {
-    check(needs, gpu.max_binding(), &gpu.describe())
+    check(
+        needs,
+        gpu.max_binding(),
+        gpu.limits.max_buffer_size,
+        &gpu.describe(),
+    )
 }
 
 #[cfg(test)]
@@ -135,27 +197,67 @@ mod tests {
 
     #[test]
     fn sizes_under_the_limit_pass_and_over_it_name_what_to_reduce() {
-        let limit = 128 << 20;
-        check(&render_needs(1_000_000, 1920, 1080), limit, "test").unwrap();
-        check(&sim_needs(1_000_000, grid(128)), limit, "test").unwrap();
+        // lavapipe's limits: bindings of 128 MiB in buffers of 2 GiB.
+        let (binding, buffer) = (128 << 20, 2047 << 20);
+        check(
+            &render_needs(1_000_000, 1920, 1080),
+            binding,
+            buffer,
+            "test",
+        )
+        .unwrap();
+        check(&sim_needs(1_000_000, grid(128)), binding, buffer, "test").unwrap();
+        // Paged arrays: past one binding, within one buffer.
+        check(
+            &render_needs(6_000_000, 1920, 1080),
+            binding,
+            buffer,
+            "test",
+        )
+        .unwrap();
+        check(&sim_needs(27_000_000, grid(192)), binding, buffer, "test").unwrap();
 
-        let e = check(&render_needs(3_000_000, 64, 64), limit, "lavapipe").unwrap_err();
+        let e = check(
+            &render_needs(30_000_000, 64, 64),
+            binding,
+            buffer,
+            "lavapipe",
+        )
+        .unwrap_err();
         let msg = e.to_string();
         assert!(
-            msg.contains("3000000 Gaussians") && msg.contains("lavapipe"),
+            msg.contains("30000000 Gaussians") && msg.contains("lavapipe"),
             "{msg}"
         );
-        assert!(msg.contains("fewer Gaussians"), "{msg}");
+        assert!(
+            msg.contains("fewer Gaussians") && msg.contains("one GPU buffer"),
+            "{msg}"
+        );
 
-        let e = check(&render_needs(10, 16384, 16384), limit, "x").unwrap_err();
+        let e = check(&render_needs(10, 16384, 16384), binding, buffer, "x").unwrap_err();
         assert!(e.to_string().contains("16384×16384 image"), "{e}");
         assert!(e.to_string().contains("--width"), "{e}");
+        assert!(e.to_string().contains("storage binding"), "{e}");
 
-        let e = check(&sim_needs(10, grid(400)), limit, "x").unwrap_err();
+        let e = check(&sim_needs(10, grid(400)), binding, buffer, "x").unwrap_err();
         assert!(e.to_string().contains("401×401×401 nodes"), "{e}");
         assert!(e.to_string().contains("simulation.dx"), "{e}");
 
-        let e = check(&sim_needs(4_000_000, grid(16)), limit, "x").unwrap_err();
-        assert!(e.to_string().contains("4000000 particles"), "{e}");
+        let e = check(&sim_needs(50_000_000, grid(16)), binding, buffer, "x").unwrap_err();
+        assert!(e.to_string().contains("50000000 particles"), "{e}");
+
+        // The derive pass binds its arrays whole.
+        let e = check(&derive_needs(1000, 4_000_000, 1000), binding, buffer, "x").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("4000000 particles, which the derive pass reads"),
+            "{e}"
+        );
+        let e = check(&derive_needs(1000, 1000, 3_000_000), binding, buffer, "x").unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("3000000 Gaussians, which the derive pass writes"),
+            "{e}"
+        );
     }
 }

@@ -61,11 +61,15 @@ fn run(cli: Cli) -> Result<()> {
                     quick,
                     per_pass,
                     peer,
+                    particles,
                 },
         }) => {
             let gpu = GpuContext::new(cli.backend)?;
             let out = &mut std::io::stdout();
-            splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, peer, out)
+            match particles {
+                Some(n) => splatter::bench::sim_scale_bench(&gpu, n, steps.max(1), out),
+                None => splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, peer, out),
+            }
         }
         Some(Command::Bench {
             what:
@@ -73,9 +77,18 @@ fn run(cli: Cli) -> Result<()> {
                     repeat,
                     quick,
                     per_pass,
+                    gaussians,
                 },
         }) => {
             let gpu = GpuContext::new(cli.backend)?;
+            if let Some(n) = gaussians {
+                return splatter::bench::render_scale_bench(
+                    &gpu,
+                    n,
+                    repeat.max(1),
+                    &mut std::io::stdout(),
+                );
+            }
             splatter::bench::render_bench(
                 &gpu,
                 repeat.max(1),

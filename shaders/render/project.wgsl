@@ -6,6 +6,8 @@
 // Mirrors `render::cpu::project_gaussian`.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
+// The page's windows of the Gaussians, their SH and their projections (indexed locally);
+// the rectangles and depth keys cover all Gaussians (indexed by page.base + local).
 @group(0) @binding(1) var<storage, read> gaussians: array<GaussianIn>;
 @group(0) @binding(2) var<storage, read> sh_words: array<u32>;
 @group(0) @binding(3) var<storage, read_write> projected: array<Projected>;
@@ -14,6 +16,7 @@
 @group(0) @binding(5) var<storage, read_write> depth_keys: array<u32>;
 @group(0) @binding(6) var<storage, read_write> depth_order: array<u32>;
 @group(0) @binding(7) var<storage, read_write> stats: Stats;
+@group(0) @binding(8) var<storage, read> page: PageRange;
 
 // Culled Gaussians sort after every visible one and touch no tile.
 const CULLED_KEY: u32 = 0xffffffffu;
@@ -45,11 +48,12 @@ fn is_finite(x: f32) -> bool {
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let g = flat_workgroup(wid, nwg) * 256u + lid;
-    if g >= frame.num_gaussians {
+    let local = flat_workgroup(wid, nwg) * 256u + lid;
+    if local >= page.count {
         return;
     }
-    let gin = gaussians[g];
+    let g = page.base + local;
+    let gin = gaussians[local];
     if !(all_finite4(gin.mean_opacity) && all_finite4(gin.cov_a) && all_finite4(gin.cov_b) && all_finite4(gin.rotation)) {
         atomicAdd(&stats.skipped_nonfinite, 1u);
         cull(g);
@@ -121,6 +125,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     depth_order[g] = g;
 
     let dir = normalize(mean - cam);
-    let color = sh_color(g, frame.sh_degree, rotate_by_conjugate(gin.rotation, dir));
-    projected[g] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, 0.0), vec4<f32>(color, 0.0));
+    let color = sh_color(local, frame.sh_degree, rotate_by_conjugate(gin.rotation, dir));
+    projected[local] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, 0.0), vec4<f32>(color, 0.0));
 }

@@ -7,9 +7,9 @@
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> tile_values: array<u32>;
-@group(0) @binding(3) var<storage, read> projected: array<Projected>;
 // RGBA8, one u32 per pixel, row-major
 @group(0) @binding(4) var<storage, read_write> image: array<u32>;
+// projected_0 … from binding 8, and projected_at(g), follow (`gpu::pages`).
 
 var<workgroup> batch_xy_opacity: array<vec4<f32>, 256>;
 var<workgroup> batch_conic: array<vec4<f32>, 256>;
@@ -49,7 +49,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) loc
         let count = min(256u, range.y - start);
         if lid < count {
             let g = tile_values[start + lid];
-            let p = projected[g];
+            let p = projected_at(g);
             batch_xy_opacity[lid] = p.xy_opacity;
             batch_conic[lid] = p.conic;
             batch_color[lid] = p.color;

@@ -13,7 +13,7 @@
 @group(0) @binding(5) var<storage, read_write> tile_values: array<u32>;
 @group(0) @binding(6) var<storage, read_write> key_count: array<u32>;
 @group(0) @binding(7) var<storage, read_write> stats: Stats;
-@group(0) @binding(8) var<storage, read> projected: array<Projected>;
+// projected_0 … from binding 8, and projected_at(g), follow (`gpu::pages`).
 
 // The footprint of Gaussian g: its tile rectangle [mn, mx), mean, conic and k².
 struct Footprint {
@@ -30,9 +30,9 @@ fn footprint(g: u32) -> Footprint {
     f.mn = vec2<u32>(r.x & 0xffffu, r.x >> 16u);
     f.mx = vec2<u32>(r.y & 0xffffu, r.y >> 16u);
     if any(f.mx <= f.mn) {
-        return f; // culled: projected[g] was not written
+        return f; // culled: its projection was not written
     }
-    let p = projected[g];
+    let p = projected_at(g);
     f.xy = p.xy_opacity.xy;
     f.conic = p.conic.xyz;
     let k = extent_sigmas(p.xy_opacity.z);

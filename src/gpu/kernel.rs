@@ -70,24 +70,58 @@ impl Kernel {
         device: &wgpu::Device,
         buffers: &[(&str, &wgpu::Buffer)],
     ) -> wgpu::BindGroup {
-        let numbered: Vec<(u32, &wgpu::Buffer)> = buffers
+        let parts: Vec<(&str, wgpu::BufferBinding)> = buffers
             .iter()
-            .map(|(name, b)| {
-                let binding = self
-                    .bindings
-                    .iter()
-                    .find(|(n, _)| n == name)
-                    .map(|(_, i)| *i)
-                    .unwrap_or_else(|| {
-                        panic!(
-                            "kernel {}: no `var {name}` at group 0 (declared: {:?})",
-                            self.label, self.bindings
-                        )
-                    });
-                (binding, *b)
+            .map(|(name, b)| (*name, b.as_entire_buffer_binding()))
+            .collect();
+        self.bind_named_parts(device, &parts)
+    }
+
+    /// As [`bind_named`](Self::bind_named), with a part of a buffer per name (a page's
+    /// window, [`crate::gpu::pages`]).
+    pub fn bind_named_parts(
+        &self,
+        device: &wgpu::Device,
+        parts: &[(&str, wgpu::BufferBinding)],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = parts
+            .iter()
+            .map(|(name, part)| wgpu::BindGroupEntry {
+                binding: self.binding_of(name),
+                resource: wgpu::BindingResource::Buffer(part.clone()),
             })
             .collect();
-        self.bind_at(device, &numbered)
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &self.layout,
+            entries: &entries,
+        })
+    }
+
+    /// Bind explicit entries (buffers or parts of them at binding numbers).
+    pub fn bind_entries(
+        &self,
+        device: &wgpu::Device,
+        entries: &[wgpu::BindGroupEntry],
+    ) -> wgpu::BindGroup {
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.label),
+            layout: &self.layout,
+            entries,
+        })
+    }
+
+    fn binding_of(&self, name: &str) -> u32 {
+        self.bindings
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, i)| *i)
+            .unwrap_or_else(|| {
+                panic!(
+                    "kernel {}: no `var {name}` at group 0 (declared: {:?})",
+                    self.label, self.bindings
+                )
+            })
     }
 
     /// Bind `buffers` to bindings 0, 1, 2, … (whole buffers).

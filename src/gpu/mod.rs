@@ -6,6 +6,7 @@ pub mod buffers;
 mod kernel;
 #[cfg(test)]
 pub(crate) mod layout_check;
+pub mod pages;
 pub mod ranges;
 pub mod scan;
 pub mod sort;
@@ -62,6 +63,15 @@ pub enum GpuError {
         needed: u64,
         limit: u64,
         advice: String,
+    },
+    #[error("{what} reads at most {max} page(s) of {size} Gaussians on {adapter}, but {gaussians} Gaussians need {pages}; render fewer Gaussians (raise the opacity threshold, or split the scene) or use a GPU with larger storage bindings")]
+    TooManyPages {
+        what: &'static str,
+        gaussians: u32,
+        pages: u32,
+        size: u32,
+        max: u32,
+        adapter: String,
     },
 }
 

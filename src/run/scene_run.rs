@@ -57,7 +57,11 @@ pub(super) fn execute(
     let mut needs = limits::render_needs(splats.len(), width, height);
     if let Some(s) = &setup {
         needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
-        needs.extend(limits::derive_needs(s.binding.len()));
+        needs.extend(limits::derive_needs(
+            s.binding.len(),
+            s.particles.len(),
+            splats.len(),
+        ));
     }
     limits::check_gpu(gpu, &needs)?;
     if opts.resume {

@@ -21,6 +21,7 @@ use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
 use super::step::{Binds, Passes, StepBuffers, StepPass};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
+use crate::gpu::pages::{PageRanges, Pages};
 use crate::gpu::stages;
 use crate::gpu::{GpuContext, GpuError};
 
@@ -28,6 +29,8 @@ pub use super::step::layout::{
     GpuCollider, GpuCondition, GpuMaterial, GpuStep, SimSetupError, MAX_COLLIDERS, MAX_KINEMATIC,
     MAX_MATERIALS,
 };
+/// Bytes of the largest per-particle record (F, C: `mat3x3<f32>`), which sizes the pages.
+const MAT3_BYTES: u64 = 48;
 /// Nodes per axis of an active block (`BLOCK` in `shaders/sim/step/common.wgsl`).
 const BLOCK: u32 = 4;
 
@@ -134,8 +137,14 @@ fn mat3_from_gpu(m: &[[f32; 4]; 3]) -> DMat3 {
 
 fn init<T: Pod>(gpu: &GpuContext, label: &str, data: &[T], readable: bool) -> wgpu::Buffer {
     let bytes: &[u8] = bytemuck::cast_slice(data);
-    let mut padded = bytes.to_vec();
-    padded.resize(bytes.len().max(256), 0);
+    // Padded to 256 bytes so that empty arrays still bind; large ones are not copied.
+    let padded: std::borrow::Cow<[u8]> = if bytes.len() >= 256 {
+        bytes.into()
+    } else {
+        let mut small = bytes.to_vec();
+        small.resize(256, 0);
+        small.into()
+    };
     let mut usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST;
     if readable {
         usage |= wgpu::BufferUsages::COPY_SRC;
@@ -175,6 +184,36 @@ impl GpuSim {
         params: &StepParams,
         path: P2gPath,
     ) -> Result<GpuSim, SimSetupError> {
+        let pages = Self::pages_for(gpu, particles.len());
+        Self::with_pages(gpu, particles, grid, materials, params, path, pages)
+    }
+
+    /// The pages the particle arrays split into on `gpu` (`gpu::pages`): the largest that
+    /// fit one storage binding.
+    pub fn pages_for(gpu: &GpuContext, particles: usize) -> Pages {
+        let binding = gpu.limits.max_storage_buffer_binding_size;
+        Pages::new(particles as u32, MAT3_BYTES, binding)
+    }
+
+    /// As [`with_path`](Self::with_path) with the particle arrays split into `pages`
+    /// (several pages need the atomic path; each array must fit one buffer).
+    pub fn with_pages(
+        gpu: &GpuContext,
+        particles: &Particles,
+        grid: &Grid,
+        materials: &[Material],
+        params: &StepParams,
+        path: P2gPath,
+        pages: Pages,
+    ) -> Result<GpuSim, SimSetupError> {
+        if pages.count > 1 && path == P2gPath::Gather {
+            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
+                "{} particles span {} storage bindings of {}; the gather P2G path (deterministic) needs them in one: use the atomic path, or fewer particles",
+                particles.len(),
+                pages.count,
+                gpu.describe()
+            ))));
+        }
         if path == P2gPath::Atomic && !gpu.features.float32_atomics {
             return Err(SimSetupError::Gpu(GpuError::Failed(format!(
                 "the atomic P2G path needs float atomics, which {} lacks",
@@ -247,6 +286,7 @@ impl GpuSim {
                 mapped_at_creation: false,
             }),
             flags: zeroed(gpu, "sim watchdog flags", 32),
+            pages: PageRanges::new(device, "sim particle pages", pages),
         };
         let sort_bits = 32 - base_cells.leading_zeros();
         let binds = passes.bind(device, &buffers, n, sort_bits);
@@ -504,8 +544,13 @@ impl GpuSim {
         self.num_particles == 0
     }
 
+    /// How the particle arrays are split into pages.
+    pub fn pages(&self) -> Pages {
+        self.buffers.pages.pages
+    }
+
     /// Positions and masses (`vec4`), and deformation gradients (`mat3x3`), for passes that
-    /// read the particle state on the GPU (the derive pass).
+    /// read the particle state on the GPU (the derive pass: one page only).
     pub fn state_buffers(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
         (&self.buffers.x_mass, &self.buffers.deformation)
     }

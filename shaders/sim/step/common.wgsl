@@ -130,6 +130,16 @@ fn grid_stencil(x: vec3<f32>) -> GridStencil {
     return out;
 }
 
+// The particles one dispatch of a per-particle pass covers. Particle arrays may exceed one
+// storage binding (gpu::pages): such a pass is dispatched once per page, over windows of
+// the arrays that start at particle `base`, and runs for the local indices 0..count.
+struct PageRange {
+    base: u32,
+    count: u32,
+}
+
+@group(0) @binding(13) var<storage, read> page: PageRange;
+
 fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
     return (wid.x + wid.y * nwg.x) * 256u + lid;
 }

@@ -16,7 +16,7 @@
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     let p = flat_id(wid, nwg, lid);
-    if p >= step.num_particles {
+    if p >= page.count {
         return;
     }
     let xm = x_mass[p];

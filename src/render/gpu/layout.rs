@@ -45,7 +45,9 @@ pub struct Frame {
     pub num_gaussians: u32,
     pub sh_degree: u32,
     pub key_capacity: u32,
-    pub _pad: [u32; 3],
+    /// log₂ of the records per page of the per-Gaussian arrays (`gpu::pages`).
+    pub page_shift: u32,
+    pub _pad: [u32; 2],
 }
 
 /// `Stats`: counters read back with every frame.
@@ -102,7 +104,8 @@ impl Frame {
             num_gaussians,
             sh_degree,
             key_capacity,
-            _pad: [0; 3],
+            page_shift: 31,
+            _pad: [0; 2],
         }
     }
 }
@@ -168,7 +171,8 @@ mod tests {
                 tiles_y,
                 num_gaussians,
                 sh_degree,
-                key_capacity
+                key_capacity,
+                page_shift
             ]
         );
         assert_layout!(

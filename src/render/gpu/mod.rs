@@ -22,6 +22,7 @@ use glam::Vec3;
 
 pub use crate::gpu::buffers::read_buffer;
 use crate::gpu::buffers::storage;
+use crate::gpu::pages::{PageRanges, Pages};
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
@@ -76,6 +77,9 @@ struct SplatBuffers {
     depth_order_alt: wgpu::Buffer,
     offsets: wgpu::Buffer,
     depth_count: wgpu::Buffer,
+    /// How the per-Gaussian records split into pages (`gpu::pages`): the Gaussians, SH and
+    /// projections are projected page by page and read back from every page.
+    pages: PageRanges,
 }
 
 /// Buffers that depend on the image size and the tile-pair capacity.
@@ -96,7 +100,8 @@ struct FrameBuffers {
 
 /// Bind groups and sort/scan plans for the current buffers.
 struct Plans {
-    project: wgpu::BindGroup,
+    /// One per page of the Gaussians.
+    project: Vec<wgpu::BindGroup>,
     depth_sort: SortPlan,
     gather: wgpu::BindGroup,
     offsets_scan: ScanPlan,
@@ -122,6 +127,8 @@ pub struct GpuRenderer {
     warned: WarnedOnce,
     /// Upper bound on the tile pairs of a frame, below what the adapter allows.
     pair_limit: Option<u32>,
+    /// Upper bound on the Gaussians per page, below what a binding holds.
+    page_limit: Option<u32>,
     profile: bool,
     lighting: Option<Lighting>,
 }
@@ -133,6 +140,63 @@ struct WarnedOnce {
     overflow: bool,
 }
 
+/// Bytes per Gaussian of the per-Gaussian arrays (their page windows).
+const GAUSSIAN_BYTES: u64 = std::mem::size_of::<GaussianIn>() as u64;
+const SH_BYTES: u64 = SH_WORDS as u64 * 4;
+const PROJECTED_BYTES: u64 = std::mem::size_of::<layout::Projected>() as u64;
+
+/// The most pages of projections the tile-key and rasterize passes can bind: at most 8,
+/// and what the adapter's storage bindings per stage leave after their other 8.
+fn max_pages(gpu: &GpuContext) -> u32 {
+    gpu.limits
+        .max_storage_buffers_per_shader_stage
+        .saturating_sub(8)
+        .clamp(1, 8)
+}
+
+/// `what` given more pages of Gaussians than it reads (the renderer: [`max_pages`]; the
+/// lighting passes: one).
+fn too_many_pages_for(what: &'static str, gpu: &GpuContext, pages: Pages) -> GpuError {
+    GpuError::TooManyPages {
+        what,
+        gaussians: pages.total,
+        pages: pages.count,
+        size: pages.size,
+        max: if what == "the renderer" {
+            max_pages(gpu)
+        } else {
+            1
+        },
+        adapter: gpu.describe(),
+    }
+}
+
+/// Bind `buffers` at their numbers and the projections' pages from
+/// [`passes::PROJECTED_PAGES_AT`].
+fn bind_with_pages(
+    kernel: &crate::gpu::Kernel,
+    device: &wgpu::Device,
+    buffers: &[(u32, &wgpu::Buffer)],
+    projected: &[wgpu::BufferBinding],
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: *i,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    entries.extend(
+        (passes::PROJECTED_PAGES_AT..)
+            .zip(projected)
+            .map(|(i, part)| wgpu::BindGroupEntry {
+                binding: i,
+                resource: wgpu::BindingResource::Buffer(part.clone()),
+            }),
+    );
+    kernel.bind_entries(device, &entries)
+}
+
 fn tile_bits(tiles: u32) -> u32 {
     32 - tiles.saturating_sub(1).leading_zeros()
 }
@@ -142,9 +206,9 @@ impl GpuRenderer {
         let device = &gpu.device;
         GpuRenderer {
             project: passes::Project::new(device),
-            tile_keys: passes::TileKeys::new(device),
+            tile_keys: passes::TileKeys::new(device, 1),
             tile_ranges: Ranges::new(device),
-            rasterize: passes::Rasterize::new(device),
+            rasterize: passes::Rasterize::new(device, 1),
             sort: RadixSort::new(device),
             scan: Scan::new(device),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
@@ -164,6 +228,7 @@ impl GpuRenderer {
             plans: None,
             warned: WarnedOnce::default(),
             pair_limit: None,
+            page_limit: None,
             profile: false,
             lighting: None,
         }
@@ -181,6 +246,12 @@ impl GpuRenderer {
         self.pair_limit = Some(max.max(1));
     }
 
+    /// Split the Gaussians into pages of at most `records` (a power of two of at least 64)
+    /// from the next upload, as a binding limit would: for tests of the paged passes.
+    pub fn limit_page_size(&mut self, records: u32) {
+        self.page_limit = Some(records);
+    }
+
     /// Relight every frame from now on (after [`upload`](Self::upload): `setup.shading` has
     /// one entry per uploaded Gaussian). Lights come per frame from
     /// [`set_lights`](Self::set_lights); until then only the ambient term lights the scene.
@@ -190,6 +261,9 @@ impl GpuRenderer {
         setup: &LightingSetup,
     ) -> Result<(), GpuError> {
         let count = self.splats.as_ref().map_or(0, |s| s.count) as usize;
+        if let Some(s) = self.splats.as_ref().filter(|s| s.pages.pages.count > 1) {
+            return Err(too_many_pages_for("lighting", gpu, s.pages.pages));
+        }
         if setup.shading.len() != count {
             return Err(GpuError::Failed(format!(
                 "lighting: {} shading entries for {count} uploaded Gaussians",
@@ -298,22 +372,20 @@ impl GpuRenderer {
         {
             self.lighting = None;
         }
-        let limit = gpu.max_binding();
-        for (what, bytes) in [
-            (
-                "the Gaussians",
-                n * std::mem::size_of::<GaussianIn>() as u64,
-            ),
-            ("the SH coefficients", n * SH_WORDS as u64 * 4),
-        ] {
-            if bytes > limit {
-                return Err(GpuError::TooLarge {
-                    what: format!("{what} of {n} Gaussians"),
-                    needed: bytes,
-                    limit,
-                    advice: "render fewer Gaussians (raise the opacity threshold, or split the scene) or use a GPU with larger buffers".into(),
-                });
+        let mut pages = Self::pages_for(gpu, splats.len())?;
+        if let Some(limit) = self.page_limit.filter(|l| *l < pages.size) {
+            pages = Pages::with_size(pages.total, limit);
+            if pages.count > max_pages(gpu) {
+                return Err(too_many_pages_for("the renderer", gpu, pages));
             }
+        }
+        if pages.count > 1 && self.lighting.is_some() {
+            return Err(too_many_pages_for("lighting", gpu, pages));
+        }
+        if self.tile_keys.pages != pages.count {
+            // The passes that read projections in any order declare one binding per page.
+            self.tile_keys = passes::TileKeys::new(&gpu.device, pages.count);
+            self.rasterize = passes::Rasterize::new(&gpu.device, pages.count);
         }
         let device = &gpu.device;
         let (gaussians, words) = layout::pack_splats(splats);
@@ -331,6 +403,7 @@ impl GpuRenderer {
             depth_order_alt: storage(device, "depth order alt", n * 4, usage),
             offsets: storage(device, "tile offsets", n * 4, usage),
             depth_count: storage(device, "depth count", 4, usage),
+            pages: PageRanges::new(device, "gaussian pages", pages),
         };
         gpu.queue
             .write_buffer(&b.gaussians, 0, bytemuck::cast_slice(&gaussians));
@@ -341,6 +414,72 @@ impl GpuRenderer {
         self.splats = Some(b);
         self.plans = None;
         Ok(())
+    }
+
+    /// The most Gaussians `gpu`'s limits allow: every page the passes bind, each array in
+    /// one buffer.
+    pub fn most_gaussians(gpu: &GpuContext) -> u64 {
+        let page = Pages::new(
+            u32::MAX / 2,
+            SH_BYTES,
+            gpu.limits.max_storage_buffer_binding_size,
+        );
+        (u64::from(page.size) * u64::from(max_pages(gpu)))
+            .min(gpu.limits.max_buffer_size / SH_BYTES)
+    }
+
+    /// Bytes of GPU memory the renderer holds (Gaussians, projections, sorts, image).
+    pub fn gpu_bytes(&self) -> u64 {
+        let splats = self.splats.iter().flat_map(|s| {
+            [
+                &s.gaussians,
+                &s.sh_words,
+                &s.projected,
+                &s.tile_rects,
+                &s.depth_keys,
+                &s.depth_order,
+                &s.depth_keys_alt,
+                &s.depth_order_alt,
+                &s.offsets,
+            ]
+        });
+        let frame = self.frame_buffers.iter().flat_map(|f| {
+            [
+                &f.tile_keys,
+                &f.tile_values,
+                &f.tile_keys_alt,
+                &f.tile_values_alt,
+                &f.ranges,
+                &f.image,
+                &f.readback,
+            ]
+        });
+        splats.chain(frame).map(|b| b.size()).sum()
+    }
+
+    /// The pages `gaussians` Gaussians split into on `gpu`: as large as one storage binding
+    /// holds of the largest record (the SH), as many as the passes can bind, each array in
+    /// one buffer.
+    pub fn pages_for(gpu: &GpuContext, gaussians: usize) -> Result<Pages, GpuError> {
+        let n = gaussians as u64;
+        let pages = Pages::new(
+            gaussians as u32,
+            SH_BYTES,
+            gpu.limits.max_storage_buffer_binding_size,
+        );
+        let buffer = gpu.limits.max_buffer_size;
+        if n * SH_BYTES > buffer || gaussians > u32::MAX as usize / 2 {
+            return Err(GpuError::TooLarge {
+                what: format!("the SH coefficients of {n} Gaussians"),
+                needed: n * SH_BYTES,
+                limit: buffer,
+                advice: "render fewer Gaussians (raise the opacity threshold, or split the scene) or use a GPU with larger buffers".into(),
+            });
+        }
+        if pages.count > max_pages(gpu) {
+            return Err(too_many_pages_for("the renderer", gpu, pages));
+        }
+        Ok(pages)
     }
 
     fn ensure_frame_buffers(
@@ -429,38 +568,33 @@ impl GpuRenderer {
             f.capacity,
             tile_bits(tiles),
         );
+        let projected: Vec<wgpu::BufferBinding> = (0..s.pages.pages.count)
+            .map(|i| s.pages.pages.window(&s.projected, i, PROJECTED_BYTES))
+            .collect();
         let (sorted_keys, sorted_values) = if tile_sort.result_in_alternates() {
             (&f.tile_keys_alt, &f.tile_values_alt)
         } else {
             (&f.tile_keys, &f.tile_values)
         };
         self.plans = Some(Plans {
-            project: self.project.kernel.bind(
-                device,
-                &[
-                    &self.frame,
-                    &s.gaussians,
-                    &s.sh_words,
-                    &s.projected,
-                    &s.tile_rects,
-                    &s.depth_keys,
-                    &s.depth_order,
-                    &self.stats,
-                ],
-            ),
+            project: (0..s.pages.pages.count)
+                .map(|i| self.project_bind(device, s, i))
+                .collect(),
             depth_sort,
-            gather: self.tile_keys.gather.bind_at(
+            gather: bind_with_pages(
+                &self.tile_keys.gather,
                 device,
                 &[
                     (0, &self.frame),
                     (1, &s.tile_rects),
                     (2, &s.depth_order),
                     (3, &s.offsets),
-                    (8, &s.projected),
                 ],
+                &projected,
             ),
             offsets_scan: self.scan.plan(device, &s.offsets, s.count),
-            total: self.tile_keys.total.bind_at(
+            total: bind_with_pages(
+                &self.tile_keys.total,
                 device,
                 &[
                     (0, &self.frame),
@@ -469,10 +603,11 @@ impl GpuRenderer {
                     (3, &s.offsets),
                     (6, &f.key_count),
                     (7, &self.stats),
-                    (8, &s.projected),
                 ],
+                &projected,
             ),
-            emit: self.tile_keys.emit.bind_at(
+            emit: bind_with_pages(
+                &self.tile_keys.emit,
                 device,
                 &[
                     (0, &self.frame),
@@ -481,25 +616,48 @@ impl GpuRenderer {
                     (3, &s.offsets),
                     (4, &f.tile_keys),
                     (5, &f.tile_values),
-                    (8, &s.projected),
                 ],
+                &projected,
             ),
             tile_sort,
             ranges: self
                 .tile_ranges
                 .kernel
                 .bind(device, &[&f.key_count, sorted_keys, &f.ranges]),
-            rasterize: self.rasterize.kernel.bind(
+            rasterize: bind_with_pages(
+                &self.rasterize.kernel,
                 device,
                 &[
-                    &self.frame,
-                    &f.ranges,
-                    sorted_values,
-                    &s.projected,
-                    &f.image,
+                    (0, &self.frame),
+                    (1, &f.ranges),
+                    (2, sorted_values),
+                    (4, &f.image),
                 ],
+                &projected,
             ),
         });
+    }
+
+    /// The projection pass over page `i` of the Gaussians.
+    fn project_bind(&self, device: &wgpu::Device, s: &SplatBuffers, i: u32) -> wgpu::BindGroup {
+        let pages = &s.pages.pages;
+        fn whole(b: &wgpu::Buffer) -> wgpu::BufferBinding<'_> {
+            b.as_entire_buffer_binding()
+        }
+        self.project.kernel.bind_named_parts(
+            device,
+            &[
+                ("frame", whole(&self.frame)),
+                ("gaussians", pages.window(&s.gaussians, i, GAUSSIAN_BYTES)),
+                ("sh_words", pages.window(&s.sh_words, i, SH_BYTES)),
+                ("projected", pages.window(&s.projected, i, PROJECTED_BYTES)),
+                ("tile_rects", whole(&s.tile_rects)),
+                ("depth_keys", whole(&s.depth_keys)),
+                ("depth_order", whole(&s.depth_order)),
+                ("stats", whole(&self.stats)),
+                ("page", s.pages.entry(i)),
+            ],
+        )
     }
 
     /// Render the uploaded Gaussians from `camera` over `background`.
@@ -618,7 +776,8 @@ impl GpuRenderer {
         let s = self.splats.as_ref().expect("upload() before render()");
         let f = self.frame_buffers.as_ref().expect("frame buffers");
         let p = self.plans.as_ref().expect("plans");
-        let frame = Frame::new(camera, background, s.count, s.sh_degree, f.capacity);
+        let mut frame = Frame::new(camera, background, s.count, s.sh_degree, f.capacity);
+        frame.page_shift = s.pages.pages.shift();
         gpu.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         let groups = s.count.div_ceil(256);
@@ -645,7 +804,10 @@ impl GpuRenderer {
         }
         if s.count > 0 {
             stages.push(Stage::new("project", |c| {
-                self.project.kernel.dispatch(c, &p.project, groups)
+                for (i, bind) in (0..).zip(&p.project) {
+                    let (_, n) = s.pages.pages.range(i);
+                    self.project.kernel.dispatch(c, bind, n.div_ceil(256));
+                }
             }));
         }
         if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {

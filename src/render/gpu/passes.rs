@@ -2,7 +2,22 @@
 //! pipeline(s) of one WGSL file under `shaders/render/`.
 
 use super::{shader_source, COMMON, SH};
+use crate::gpu::pages::wgsl_paged_reader;
 use crate::gpu::Kernel;
+
+/// The first binding of the projected Gaussians' pages in the passes that read them in
+/// any order (tile keys, rasterize): `projected_0` … `projected_{pages-1}`.
+pub const PROJECTED_PAGES_AT: u32 = 8;
+
+fn projected_reader(pages: u32) -> String {
+    wgsl_paged_reader(
+        "projected",
+        "Projected",
+        PROJECTED_PAGES_AT,
+        pages,
+        "frame.page_shift",
+    )
+}
 
 /// `shaders/render/project.wgsl`.
 pub struct Project {
@@ -22,18 +37,21 @@ impl Project {
     }
 }
 
-/// `shaders/render/tile_keys.wgsl`: tile counts in depth order, their total, the pairs.
+/// `shaders/render/tile_keys.wgsl`: tile counts in depth order, their total, the pairs;
+/// reading the projections from `pages` pages.
 pub struct TileKeys {
     pub gather: Kernel,
     pub total: Kernel,
     pub emit: Kernel,
+    pub pages: u32,
 }
 
 impl TileKeys {
-    pub fn new(device: &wgpu::Device) -> TileKeys {
+    pub fn new(device: &wgpu::Device, pages: u32) -> TileKeys {
         let src = shader_source(&[
             COMMON,
             include_str!("../../../shaders/render/tile_keys.wgsl"),
+            &projected_reader(pages),
         ]);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("tile_keys"),
@@ -48,20 +66,22 @@ impl TileKeys {
             ),
             total: Kernel::from_module(device, "tile_keys total", &module, "total"),
             emit: Kernel::from_module(device, "tile_keys emit", &module, "emit"),
+            pages,
         }
     }
 }
 
-/// `shaders/render/rasterize.wgsl`.
+/// `shaders/render/rasterize.wgsl`, reading the projections from `pages` pages.
 pub struct Rasterize {
     pub kernel: Kernel,
 }
 
 impl Rasterize {
-    pub fn new(device: &wgpu::Device) -> Rasterize {
+    pub fn new(device: &wgpu::Device, pages: u32) -> Rasterize {
         let src = shader_source(&[
             COMMON,
             include_str!("../../../shaders/render/rasterize.wgsl"),
+            &projected_reader(pages),
         ]);
         Rasterize {
             kernel: Kernel::new(device, "rasterize", &src, "main"),

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, StepBuffers, MAT3, SCALAR, VEC4};
 
 pub(crate) struct G2p {
     kernel: Kernel,
@@ -17,25 +17,27 @@ impl G2p {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+    /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+        self.kernel.bind_named_parts(
             device,
             &[
-                ("step", &b.step),
-                ("x_mass", &b.x_mass),
-                ("v_volume", &b.v_volume),
-                ("deformation", &b.deformation),
-                ("affine_velocity", &b.affine_velocity),
-                ("alpha", &b.alpha),
-                ("material", &b.material),
-                ("grid", &b.grid),
-                ("flags", &b.flags),
-                ("block_slot", &b.block_slot),
+                ("step", b.step.as_entire_buffer_binding()),
+                ("page", b.pages.entry(i)),
+                ("x_mass", b.window(&b.x_mass, i, VEC4)),
+                ("v_volume", b.window(&b.v_volume, i, VEC4)),
+                ("deformation", b.window(&b.deformation, i, MAT3)),
+                ("affine_velocity", b.window(&b.affine_velocity, i, MAT3)),
+                ("alpha", b.window(&b.alpha, i, SCALAR)),
+                ("material", b.window(&b.material, i, SCALAR)),
+                ("grid", b.grid.as_entire_buffer_binding()),
+                ("flags", b.flags.as_entire_buffer_binding()),
+                ("block_slot", b.block_slot.as_entire_buffer_binding()),
             ],
         )
     }
 
-    /// One invocation per particle.
+    /// One invocation per particle of the page.
     pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
         self.kernel.dispatch(c, bind, particles.div_ceil(256));
     }

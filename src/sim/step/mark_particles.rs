@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, StepBuffers, VEC4};
 
 pub(crate) struct MarkParticles {
     kernel: Kernel,
@@ -17,18 +17,20 @@ impl MarkParticles {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+    /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+        self.kernel.bind_named_parts(
             device,
             &[
-                ("step", &b.step),
-                ("x_mass", &b.x_mass),
-                ("block_flags", &b.block_flags),
+                ("step", b.step.as_entire_buffer_binding()),
+                ("page", b.pages.entry(i)),
+                ("x_mass", b.window(&b.x_mass, i, VEC4)),
+                ("block_flags", b.block_flags.as_entire_buffer_binding()),
             ],
         )
     }
 
-    /// One invocation per particle.
+    /// One invocation per particle of the page.
     pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
         self.kernel.dispatch(c, bind, particles.div_ceil(256));
     }

@@ -39,6 +39,7 @@ pub(crate) use p2g::P2gGather;
 pub(crate) use p2g_scatter::P2gScatter;
 pub(crate) use prepare::Prepare;
 
+use crate::gpu::pages::PageRanges;
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::Scan;
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
@@ -90,6 +91,25 @@ pub(crate) struct StepBuffers {
     pub active_blocks: wgpu::Buffer,
     pub block_args: wgpu::Buffer,
     pub flags: wgpu::Buffer,
+    /// How the particle arrays split into pages, one entry per page for its dispatches.
+    pub pages: PageRanges,
+}
+
+/// Bytes per particle of the particle arrays, by record type (their page windows).
+pub(crate) const VEC4: u64 = 16;
+pub(crate) const MAT3: u64 = 48;
+pub(crate) const SCALAR: u64 = 4;
+
+impl StepBuffers {
+    /// Page `i`'s window of the particle array `buffer` of `record`-byte records.
+    pub fn window<'a>(
+        &'a self,
+        buffer: &'a wgpu::Buffer,
+        i: u32,
+        record: u64,
+    ) -> wgpu::BufferBinding<'a> {
+        self.pages.pages.window(buffer, i, record)
+    }
 }
 
 /// The sorted cell keys and particle indices (in the sort's primary or alternate buffers).
@@ -117,21 +137,30 @@ struct AtomicPasses {
     grid: GridFromSums,
 }
 
-/// The bind groups of [`Passes`] over one set of [`StepBuffers`].
+/// The bind groups of [`Passes`] over one set of [`StepBuffers`]; the per-particle passes
+/// have one per page of the particles.
 pub(crate) struct Binds {
-    prepare: wgpu::BindGroup,
-    sort: SortPlan,
-    ranges: wgpu::BindGroup,
-    mark_blocks: wgpu::BindGroup,
+    prepare: Vec<wgpu::BindGroup>,
     compact_blocks: wgpu::BindGroup,
-    gather: wgpu::BindGroup,
-    g2p: wgpu::BindGroup,
+    g2p: Vec<wgpu::BindGroup>,
+    /// Particles of each page.
+    page_counts: Vec<u32>,
+    /// The path's own passes: one of the two.
+    gather: Option<GatherBinds>,
     atomic: Option<AtomicBinds>,
 }
 
+/// The gather path's passes, which bind all particles whole (one page).
+struct GatherBinds {
+    sort: SortPlan,
+    ranges: wgpu::BindGroup,
+    mark_blocks: wgpu::BindGroup,
+    gather: wgpu::BindGroup,
+}
+
 struct AtomicBinds {
-    mark: wgpu::BindGroup,
-    scatter: wgpu::BindGroup,
+    mark: Vec<wgpu::BindGroup>,
+    scatter: Vec<wgpu::BindGroup>,
     grid: wgpu::BindGroup,
 }
 
@@ -189,8 +218,35 @@ impl Passes {
         }
     }
 
-    /// Bind every pass to `b`, for `n` particles sorted by keys of `sort_bits` bits.
+    /// Bind every pass of the path to `b`, for `n` particles sorted (on the gather path) by
+    /// keys of `sort_bits` bits.
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, n: u32, sort_bits: u32) -> Binds {
+        let pages = 0..b.pages.pages.count;
+        let per_page = |bind: &dyn Fn(u32) -> wgpu::BindGroup| pages.clone().map(bind).collect();
+        Binds {
+            prepare: per_page(&|i| self.prepare.bind(device, b, i)),
+            compact_blocks: self.compact_blocks.bind(device, b),
+            g2p: per_page(&|i| self.g2p.bind(device, b, i)),
+            page_counts: pages.clone().map(|i| b.pages.pages.range(i).1).collect(),
+            gather: self
+                .atomic
+                .is_none()
+                .then(|| self.bind_gather(device, b, n, sort_bits)),
+            atomic: self.atomic.as_ref().map(|a| AtomicBinds {
+                mark: per_page(&|i| a.mark.bind(device, b, i)),
+                scatter: per_page(&|i| a.scatter.bind(device, b, i)),
+                grid: a.grid.bind(device, b),
+            }),
+        }
+    }
+
+    fn bind_gather(
+        &self,
+        device: &wgpu::Device,
+        b: &StepBuffers,
+        n: u32,
+        sort_bits: u32,
+    ) -> GatherBinds {
         let sort = self.sort.plan(
             device,
             &self.scan,
@@ -215,21 +271,13 @@ impl Passes {
                 values: &b.values,
             }
         };
-        Binds {
-            prepare: self.prepare.bind(device, b),
+        GatherBinds {
             ranges: self
                 .ranges
                 .kernel
                 .bind(device, &[&b.key_count, sorted.keys, &b.ranges]),
             mark_blocks: self.mark_blocks.bind(device, b, &sorted),
-            compact_blocks: self.compact_blocks.bind(device, b),
             gather: self.gather.bind(device, b, &sorted),
-            g2p: self.g2p.bind(device, b),
-            atomic: self.atomic.as_ref().map(|a| AtomicBinds {
-                mark: a.mark.bind(device, b),
-                scatter: a.scatter.bind(device, b),
-                grid: a.grid.bind(device, b),
-            }),
             sort,
         }
     }
@@ -275,33 +323,46 @@ impl Passes {
             .map(|&pass| {
                 Stage::new(pass.name(), move |c: &mut wgpu::ComputePass| match pass {
                     StepPass::Clear => {}
-                    StepPass::Prepare => self.prepare.record(c, &binds.prepare, particles),
+                    StepPass::Prepare => {
+                        for (bind, n) in binds.pages(&binds.prepare) {
+                            self.prepare.record(c, bind, n);
+                        }
+                    }
                     StepPass::MarkParticles => {
                         let (a, ab) = self.atomic_passes(binds);
-                        a.mark.record(c, &ab.mark, particles);
+                        for (bind, n) in binds.pages(&ab.mark) {
+                            a.mark.record(c, bind, n);
+                        }
                     }
                     StepPass::Scatter => {
                         let (a, ab) = self.atomic_passes(binds);
-                        a.scatter.record(c, &ab.scatter, particles);
+                        for (bind, n) in binds.pages(&ab.scatter) {
+                            a.scatter.record(c, bind, n);
+                        }
                     }
                     StepPass::GridFromSums => {
                         let (a, ab) = self.atomic_passes(binds);
                         a.grid.record(c, &ab.grid, b);
                     }
-                    StepPass::Sort => self.sort.record(c, &self.scan, &binds.sort),
-                    StepPass::Ranges => {
-                        self.ranges
-                            .kernel
-                            .dispatch(c, &binds.ranges, particles.div_ceil(256))
-                    }
+                    StepPass::Sort => self.sort.record(c, &self.scan, &gather_binds(binds).sort),
+                    StepPass::Ranges => self.ranges.kernel.dispatch(
+                        c,
+                        &gather_binds(binds).ranges,
+                        particles.div_ceil(256),
+                    ),
                     StepPass::MarkBlocks => {
-                        self.mark_blocks.record(c, &binds.mark_blocks, particles)
+                        self.mark_blocks
+                            .record(c, &gather_binds(binds).mark_blocks, particles)
                     }
                     StepPass::CompactBlocks => {
                         self.compact_blocks.record(c, &binds.compact_blocks, blocks)
                     }
-                    StepPass::Gather => self.gather.record(c, &binds.gather, b),
-                    StepPass::G2p => self.g2p.record(c, &binds.g2p, particles),
+                    StepPass::Gather => self.gather.record(c, &gather_binds(binds).gather, b),
+                    StepPass::G2p => {
+                        for (bind, n) in binds.pages(&binds.g2p) {
+                            self.g2p.record(c, bind, n);
+                        }
+                    }
                 })
             })
             .collect()
@@ -312,5 +373,22 @@ impl Passes {
             (Some(a), Some(b)) => (a, b),
             _ => unreachable!("atomic pass recorded on the gather path"),
         }
+    }
+}
+
+fn gather_binds(binds: &Binds) -> &GatherBinds {
+    binds
+        .gather
+        .as_ref()
+        .expect("gather pass recorded on the atomic path")
+}
+
+impl Binds {
+    /// Each page's bind group of a per-particle pass, with the page's particle count.
+    fn pages<'a>(
+        &'a self,
+        binds: &'a [wgpu::BindGroup],
+    ) -> impl Iterator<Item = (&'a wgpu::BindGroup, u32)> + 'a {
+        binds.iter().zip(self.page_counts.iter().copied())
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, StepBuffers, MAT3, VEC4};
 
 pub(crate) struct P2gScatter {
     kernel: Kernel,
@@ -17,21 +17,23 @@ impl P2gScatter {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+    /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+        self.kernel.bind_named_parts(
             device,
             &[
-                ("step", &b.step),
-                ("x_mass", &b.x_mass),
-                ("v_volume", &b.v_volume),
-                ("affine", &b.affine),
-                ("grid_sum", &b.grid),
-                ("block_slot", &b.block_slot),
+                ("step", b.step.as_entire_buffer_binding()),
+                ("page", b.pages.entry(i)),
+                ("x_mass", b.window(&b.x_mass, i, VEC4)),
+                ("v_volume", b.window(&b.v_volume, i, VEC4)),
+                ("affine", b.window(&b.affine, i, MAT3)),
+                ("grid_sum", b.grid.as_entire_buffer_binding()),
+                ("block_slot", b.block_slot.as_entire_buffer_binding()),
             ],
         )
     }
 
-    /// One invocation per particle.
+    /// One invocation per particle of the page.
     pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
         self.kernel.dispatch(c, bind, particles.div_ceil(256));
     }

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, StepBuffers, MAT3, SCALAR, VEC4};
 
 pub(crate) struct Prepare {
     kernel: Kernel,
@@ -17,24 +17,26 @@ impl Prepare {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+    /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
+    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+        self.kernel.bind_named_parts(
             device,
             &[
-                ("step", &b.step),
-                ("x_mass", &b.x_mass),
-                ("v_volume", &b.v_volume),
-                ("deformation", &b.deformation),
-                ("affine_velocity", &b.affine_velocity),
-                ("material", &b.material),
-                ("cell_keys", &b.keys),
-                ("cell_values", &b.values),
-                ("affine", &b.affine),
+                ("step", b.step.as_entire_buffer_binding()),
+                ("page", b.pages.entry(i)),
+                ("x_mass", b.window(&b.x_mass, i, VEC4)),
+                ("v_volume", b.window(&b.v_volume, i, VEC4)),
+                ("deformation", b.window(&b.deformation, i, MAT3)),
+                ("affine_velocity", b.window(&b.affine_velocity, i, MAT3)),
+                ("material", b.window(&b.material, i, SCALAR)),
+                ("cell_keys", b.window(&b.keys, i, SCALAR)),
+                ("cell_values", b.window(&b.values, i, SCALAR)),
+                ("affine", b.window(&b.affine, i, MAT3)),
             ],
         )
     }
 
-    /// One invocation per particle.
+    /// One invocation per particle of the page.
     pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
         self.kernel.dispatch(c, bind, particles.div_ceil(256));
     }
