@@ -477,11 +477,16 @@ pub fn sim_scale_bench(gpu: &GpuContext, n: usize, steps: u32, out: &mut dyn Wri
         w.escaped,
         w.pool_overflow
     )?;
+    write_memory(out, sim.gpu_bytes(), np, "particle")
+}
+
+/// The GPU bytes of a scale benchmark, per `unit`, and the process's peak memory.
+fn write_memory(out: &mut dyn Write, gpu_bytes: u64, count: usize, unit: &str) -> Result<()> {
     writeln!(
         out,
-        "GPU buffers {:.2} GiB ({:.0} bytes/particle); peak memory of the process {}",
-        gib(sim.gpu_bytes()),
-        sim.gpu_bytes() as f64 / np as f64,
+        "GPU buffers {:.2} GiB ({:.0} bytes/{unit}); peak memory of the process {}",
+        gib(gpu_bytes),
+        gpu_bytes as f64 / count.max(1) as f64,
         peak_memory().map_or("unknown".into(), |b| format!("{:.2} GiB", gib(b)))
     )?;
     Ok(())
@@ -539,14 +544,7 @@ pub fn render_scale_bench(
         image.stats.intersections,
         image.dropped_intersections
     )?;
-    writeln!(
-        out,
-        "GPU buffers {:.2} GiB ({:.0} bytes/Gaussian); peak memory of the process {}",
-        gib(renderer.gpu_bytes()),
-        renderer.gpu_bytes() as f64 / n as f64,
-        peak_memory().map_or("unknown".into(), |b| format!("{:.2} GiB", gib(b)))
-    )?;
-    Ok(())
+    write_memory(out, renderer.gpu_bytes(), n, "Gaussian")
 }
 
 /// Another MPM code that `bench sim --peer` runs on the same case in the same run.
