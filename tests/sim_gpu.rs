@@ -3,12 +3,14 @@
 //! summation order (a per-node gather in sorted order, like the CPU), so agreement is
 //! within f32 round-off grown over the steps, stated per test in units of Δx.
 
+mod common;
+
 use glam::{DMat3, DVec3};
 use splatter::gpu::pages::Pages;
 use splatter::gpu::GpuContext;
 use splatter::sim::cpu::step;
 use splatter::sim::gpu::{GpuSim, P2gPath};
-use splatter::sim::nacc::{Case3Variant, NaccParams};
+use splatter::sim::nacc::Case3Variant;
 use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
@@ -275,14 +277,7 @@ fn nacc_sphere() -> Scene {
     let dx = 0.02;
     let density = 2.0;
     let material = Material::Nacc {
-        params: NaccParams {
-            e: 2000.0,
-            nu: 0.38,
-            alpha0: -0.04,
-            beta: 1.0,
-            xi: 2.0,
-            m_slope: 2.36,
-        },
+        params: common::fruit(),
         variant: Case3Variant::Continuous { k: 2.0 },
     };
     let mut particles =
