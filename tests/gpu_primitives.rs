@@ -3,7 +3,7 @@
 
 use splatter::gpu::scan::Scan;
 use splatter::gpu::sort::{RadixSort, SortBuffers};
-use splatter::gpu::GpuContext;
+use splatter::gpu::{Executor, GpuContext};
 use splatter::render::gpu::read_buffer;
 use splatter::rng::SplitMix64;
 use wgpu::util::DeviceExt;
@@ -106,7 +106,18 @@ fn scan_saturates_instead_of_wrapping() {
 fn radix_sort_is_a_stable_sort() {
     let gpu = gpu();
     let scan = Scan::new(&gpu.device);
-    let sort = RadixSort::new(&gpu.device);
+    // Both workgroup shapes on this adapter, whichever it would choose.
+    for executor in [Executor::Gpu, Executor::Cpu] {
+        stable_sort_cases(
+            &gpu,
+            &scan,
+            &RadixSort::new(&gpu.device, executor),
+            executor,
+        );
+    }
+}
+
+fn stable_sort_cases(gpu: &GpuContext, scan: &Scan, sort: &RadixSort, executor: Executor) {
     let mut rng = SplitMix64::new(11);
     // 1 and 3 passes leave the result in the alternates; 2, 4 and 8 in the inputs.
     for (n, bits, capacity) in [
@@ -130,9 +141,9 @@ fn radix_sort_is_a_stable_sort() {
         padded_keys.resize(capacity as usize, 0xDEAD);
         let mut padded_values = values.clone();
         padded_values.resize(capacity as usize, 0xBEEF);
-        let (k, v) = (upload(&gpu, &padded_keys), upload(&gpu, &padded_values));
-        let (ka, va) = (upload(&gpu, &padded_keys), upload(&gpu, &padded_values));
-        let count = upload(&gpu, &[n as u32]);
+        let (k, v) = (upload(gpu, &padded_keys), upload(gpu, &padded_values));
+        let (ka, va) = (upload(gpu, &padded_keys), upload(gpu, &padded_values));
+        let count = upload(gpu, &[n as u32]);
         let buffers = SortBuffers {
             count: &count,
             keys: &k,
@@ -140,11 +151,11 @@ fn radix_sort_is_a_stable_sort() {
             keys_alt: &ka,
             values_alt: &va,
         };
-        let plan = sort.plan(&gpu.device, &scan, &buffers, capacity, bits);
+        let plan = sort.plan(&gpu.device, scan, &buffers, capacity, bits);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         sort.record(
             &mut enc.begin_compute_pass(&Default::default()),
-            &scan,
+            scan,
             &plan,
         );
         gpu.queue.submit([enc.finish()]);
@@ -156,10 +167,10 @@ fn radix_sort_is_a_stable_sort() {
         let mut expected: Vec<(u32, u32)> =
             keys.iter().copied().zip(values.iter().copied()).collect();
         expected.sort_by_key(|(key, _)| *key); // stable
-        let got_keys = download(&gpu, k, n);
-        let got_values = download(&gpu, v, n);
+        let got_keys = download(gpu, k, n);
+        let got_values = download(gpu, v, n);
         let got: Vec<(u32, u32)> = got_keys.into_iter().zip(got_values).collect();
-        assert_eq!(got, expected, "n = {n}, {bits} bits");
+        assert_eq!(got, expected, "n = {n}, {bits} bits, {executor:?} shape");
     }
 }
 

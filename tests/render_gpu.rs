@@ -4,7 +4,7 @@
 //! or llvmpipe (GL) serves. Set `SPLATTER_TEST_BACKEND=gl` to run them on GL.
 
 use glam::{Mat3, Quat, Vec3};
-use splatter::gpu::GpuContext;
+use splatter::gpu::{Executor, GpuContext};
 use splatter::render::cpu;
 use splatter::render::splats::sym3_from_mat3;
 use splatter::render::{Camera, GpuRenderer, Splats};
@@ -328,5 +328,37 @@ fn gaussians_over_pages_render_as_in_one_page() {
         };
         let refused = paged.set_lighting(&gpu, &setup).expect_err("refused");
         assert!(refused.to_string().contains("page"), "{refused}");
+    }
+}
+
+/// The sort and the rasteriser have a workgroup shape per kind of adapter (`Executor`);
+/// both shapes give the same image on this adapter, on an image whose size leaves
+/// partial tiles and partial pixel columns.
+#[test]
+fn both_workgroup_shapes_render_the_same_image() {
+    for gpu in gpus() {
+        let cam = camera(101, 70);
+        let splats = random_splats(3000, 3, 5);
+        let mut images = Vec::new();
+        for executor in [Executor::Gpu, Executor::Cpu] {
+            let mut renderer = GpuRenderer::with_executor(&gpu, executor);
+            renderer.upload(&gpu, &splats).unwrap();
+            images.push(renderer.render(&gpu, &cam, Vec3::splat(0.2)).unwrap());
+        }
+        let differ = images[0]
+            .rgba
+            .iter()
+            .zip(&images[1].rgba)
+            .filter(|(a, b)| a != b)
+            .count();
+        eprintln!(
+            "{}: {} visible, {} tile pairs; GPU and CPU shapes: {differ} channels differ",
+            gpu.describe(),
+            images[0].stats.visible,
+            images[0].stats.intersections
+        );
+        assert!(images[0].stats.visible > 1500, "{:?}", images[0].stats);
+        assert_eq!(images[0].stats, images[1].stats);
+        assert_eq!(differ, 0);
     }
 }

@@ -4,6 +4,8 @@
 // `scatter`, which ranks keys inside the block with a workgroup scan of digit counts
 // (16 fields of 16 bits packed in two vec4<u32>) so the order of equal keys is kept.
 // Needs no subgroup operations and no float atomics, so it runs on every backend.
+// WG (invocations per workgroup) and KEYS_PER_THREAD are set per adapter by `gpu::sort`
+// (prepended constants); a block is always WG · KEYS_PER_THREAD = 2048 keys.
 
 struct SortParams {
     shift: u32,
@@ -20,9 +22,7 @@ struct SortParams {
 @group(0) @binding(5) var<storage, read_write> keys_out: array<u32>;
 @group(0) @binding(6) var<storage, read_write> values_out: array<u32>;
 
-const WG: u32 = 256u;
-const KEYS_PER_THREAD: u32 = 8u;
-const BLOCK: u32 = 2048u;
+const BLOCK: u32 = WG * KEYS_PER_THREAD;
 
 var<workgroup> hist: array<atomic<u32>, 16>;
 var<workgroup> shared_count: u32;
@@ -44,7 +44,7 @@ fn digit_of(key: u32) -> u32 {
     return (key >> params.shift) & 15u;
 }
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG)
 fn count_digits(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) lid: u32) {
     let block = flat_wg(wid, nwg);
@@ -78,8 +78,8 @@ fn count_digits(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
 
 // One-hot digit vectors: digit d is field (d & 1) (16 bits) of word d >> 1, words 0..3 in
 // `lo`, 4..7 in `hi`. A field counts at most BLOCK = 2048 keys, so 16 bits suffice.
-var<workgroup> scan_lo: array<vec4<u32>, 256>;
-var<workgroup> scan_hi: array<vec4<u32>, 256>;
+var<workgroup> scan_lo: array<vec4<u32>, WG>;
+var<workgroup> scan_hi: array<vec4<u32>, WG>;
 var<workgroup> digit_base: array<u32, 16>;
 
 fn field(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
@@ -97,7 +97,7 @@ fn field(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
 // workgroup scan of those counts gives every key its rank among equal digits of the block:
 // (keys of earlier invocations) + (earlier keys of the same invocation). Few barriers per
 // key matters on CPU drivers such as lavapipe, where a barrier is expensive.
-@compute @workgroup_size(256)
+@compute @workgroup_size(WG)
 fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
            @builtin(local_invocation_index) lid: u32) {
     let block = flat_wg(wid, nwg);

@@ -156,7 +156,7 @@ impl GpuNormals {
         let values_alt = storage(device, "normals values alt", n * 4);
         let key_count = init("normals count", bytemuck::bytes_of(&[count, 0, 0, 0]));
         let cell_ranges = storage(device, "normals cell ranges", u64::from(cells) * 8);
-        let sort = RadixSort::new(device);
+        let sort = RadixSort::new(device, gpu.executor());
         let scan = Scan::new(device);
         let plan = sort.plan(
             device,

@@ -83,6 +83,29 @@ pub struct OptionalFeatures {
     pub timestamps: bool,
 }
 
+/// How an adapter runs the invocations of a workgroup. It sets the workgroup shapes of the
+/// passes whose cost is barriers and per-invocation overhead more than arithmetic (the
+/// radix sort, the rasteriser); both shapes compute the same result.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Executor {
+    /// A GPU: invocations run side by side and a barrier is cheap, so many light
+    /// invocations hide memory latency best.
+    Gpu,
+    /// A CPU driver (lavapipe, llvmpipe): a workgroup runs on one core as SIMD vectors of
+    /// 4–16 invocations taken in turn, and every barrier switches between all of them, so
+    /// fewer invocations that each do more work are faster.
+    Cpu,
+}
+
+impl Executor {
+    pub fn of(info: &wgpu::AdapterInfo) -> Executor {
+        match info.device_type {
+            wgpu::DeviceType::Cpu => Executor::Cpu,
+            _ => Executor::Gpu,
+        }
+    }
+}
+
 /// The opened device and what we know about it.
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
@@ -224,6 +247,11 @@ impl GpuContext {
             limits,
             errors,
         })
+    }
+
+    /// How this adapter runs workgroups.
+    pub fn executor(&self) -> Executor {
+        Executor::of(&self.info)
     }
 
     /// One line naming the adapter, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Cpu, Vulkan)`.

@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use bytemuck::{Pod, Zeroable};
 
 use super::scan::{Scan, ScanPlan};
-use super::Kernel;
+use super::{Executor, Kernel};
 
 /// `SortParams` of `shaders/gpu/radix_sort.wgsl`.
 #[repr(C)]
@@ -21,6 +21,16 @@ pub struct SortParams {
 /// Keys per workgroup (`BLOCK` in the shader).
 pub const BLOCK: u32 = 2048;
 pub const BITS_PER_PASS: u32 = 4;
+
+/// Invocations per workgroup and keys per invocation (`WG`, `KEYS_PER_THREAD`): a CPU
+/// driver pays for each of the ranking scan's barriers once per SIMD vector of the
+/// workgroup, so there a block is ranked by fewer invocations holding more keys.
+pub fn shape(executor: Executor) -> (u32, u32) {
+    match executor {
+        Executor::Gpu => (256, 8),
+        Executor::Cpu => (64, 32),
+    }
+}
 
 pub struct RadixSort {
     count: Kernel,
@@ -65,8 +75,13 @@ impl SortPlan {
 }
 
 impl RadixSort {
-    pub fn new(device: &wgpu::Device) -> RadixSort {
-        let src = include_str!("../../shaders/gpu/radix_sort.wgsl");
+    pub fn new(device: &wgpu::Device, executor: Executor) -> RadixSort {
+        let (threads, keys_per_thread) = shape(executor);
+        debug_assert_eq!(threads * keys_per_thread, BLOCK);
+        let src = format!(
+            "const WG: u32 = {threads}u;\nconst KEYS_PER_THREAD: u32 = {keys_per_thread}u;\n{}",
+            include_str!("../../shaders/gpu/radix_sort.wgsl")
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("radix_sort"),
             source: wgpu::ShaderSource::Wgsl(src.into()),

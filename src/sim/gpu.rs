@@ -223,7 +223,7 @@ impl GpuSim {
         let n = particles.len() as u32;
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
-        let passes = Passes::new(device, path == P2gPath::Atomic);
+        let passes = Passes::new(device, gpu.executor(), path == P2gPath::Atomic);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]

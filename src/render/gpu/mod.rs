@@ -27,7 +27,7 @@ use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::stages::{self, Stage};
-use crate::gpu::{GpuContext, GpuError};
+use crate::gpu::{Executor, GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
@@ -131,6 +131,8 @@ pub struct GpuRenderer {
     page_limit: Option<u32>,
     profile: bool,
     lighting: Option<Lighting>,
+    /// The workgroup shapes the sort and the rasteriser were built for.
+    executor: Executor,
 }
 
 #[derive(Default)]
@@ -203,13 +205,19 @@ fn tile_bits(tiles: u32) -> u32 {
 
 impl GpuRenderer {
     pub fn new(gpu: &GpuContext) -> GpuRenderer {
+        GpuRenderer::with_executor(gpu, gpu.executor())
+    }
+
+    /// With the workgroup shapes of `executor` instead of the adapter's own (the images are
+    /// the same; tests check that on one adapter).
+    pub fn with_executor(gpu: &GpuContext, executor: Executor) -> GpuRenderer {
         let device = &gpu.device;
         GpuRenderer {
             project: passes::Project::new(device),
             tile_keys: passes::TileKeys::new(device, 1),
             tile_ranges: Ranges::new(device),
-            rasterize: passes::Rasterize::new(device, 1),
-            sort: RadixSort::new(device),
+            rasterize: passes::Rasterize::new(device, 1, executor),
+            sort: RadixSort::new(device, executor),
             scan: Scan::new(device),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame"),
@@ -231,6 +239,7 @@ impl GpuRenderer {
             page_limit: None,
             profile: false,
             lighting: None,
+            executor,
         }
     }
 
@@ -385,7 +394,7 @@ impl GpuRenderer {
         if self.tile_keys.pages != pages.count {
             // The passes that read projections in any order declare one binding per page.
             self.tile_keys = passes::TileKeys::new(&gpu.device, pages.count);
-            self.rasterize = passes::Rasterize::new(&gpu.device, pages.count);
+            self.rasterize = passes::Rasterize::new(&gpu.device, pages.count, self.executor);
         }
         let device = &gpu.device;
         let (gaussians, words) = layout::pack_splats(splats);

@@ -3,7 +3,7 @@
 
 use super::{shader_source, COMMON, SH};
 use crate::gpu::pages::wgsl_paged_reader;
-use crate::gpu::Kernel;
+use crate::gpu::{Executor, Kernel};
 
 /// The first binding of the projected Gaussians' pages in the passes that read them in
 /// any order (tile keys, rasterize): `projected_0` … `projected_{pages-1}`.
@@ -76,9 +76,22 @@ pub struct Rasterize {
     pub kernel: Kernel,
 }
 
+/// Pixels each rasteriser invocation composites, in quads of four (`QUADS`): one quad on a
+/// GPU (64 invocations per tile), two on a CPU driver (32), where fewer invocations
+/// mean fewer SIMD vectors to switch between at each barrier and each Gaussian read from
+/// workgroup memory serves more pixels.
+pub fn rasterize_quads(executor: Executor) -> u32 {
+    match executor {
+        Executor::Gpu => 1,
+        Executor::Cpu => 2,
+    }
+}
+
 impl Rasterize {
-    pub fn new(device: &wgpu::Device, pages: u32) -> Rasterize {
+    pub fn new(device: &wgpu::Device, pages: u32, executor: Executor) -> Rasterize {
+        let quads = format!("const QUADS: u32 = {}u;", rasterize_quads(executor));
         let src = shader_source(&[
+            &quads,
             COMMON,
             include_str!("../../../shaders/render/rasterize.wgsl"),
             &projected_reader(pages),

@@ -44,7 +44,7 @@ use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::Scan;
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::stages::Stage;
-use crate::gpu::Kernel;
+use crate::gpu::{Executor, Kernel};
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
 /// declarations, the material models and their dispatch, then the pass.
@@ -200,10 +200,10 @@ impl StepPass {
 
 impl Passes {
     /// Compile the passes; the atomic path's with `atomic`.
-    pub fn new(device: &wgpu::Device, atomic: bool) -> Passes {
+    pub fn new(device: &wgpu::Device, executor: Executor, atomic: bool) -> Passes {
         Passes {
             prepare: Prepare::new(device),
-            sort: RadixSort::new(device),
+            sort: RadixSort::new(device, executor),
             scan: Scan::new(device),
             ranges: Ranges::new(device),
             mark_blocks: MarkBlocks::new(device),
