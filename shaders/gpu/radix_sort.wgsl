@@ -24,7 +24,8 @@ struct SortParams {
 
 const BLOCK: u32 = WG * KEYS_PER_THREAD;
 
-var<workgroup> hist: array<atomic<u32>, 16>;
+// The block's digit counts, packed as in `Packed` below.
+var<workgroup> hist: array<atomic<u32>, 8>;
 var<workgroup> shared_count: u32;
 
 // The number of keys, loaded so that every invocation provably sees the same value (blocks
@@ -44,6 +45,31 @@ fn digit_of(key: u32) -> u32 {
     return (key >> params.shift) & 15u;
 }
 
+// Digit counts packed one-hot: digit d is field (d & 1) (16 bits) of word d >> 1, words
+// 0..3 in `lo`, 4..7 in `hi`. A field counts at most BLOCK = 2048 keys, so 16 bits suffice,
+// and adding two packed counts adds all sixteen counters at once.
+struct Packed {
+    lo: vec4<u32>,
+    hi: vec4<u32>,
+}
+
+// `c` with one more key of digit d (no branch: the same instructions for every digit).
+fn count_digit(c: Packed, d: u32) -> Packed {
+    let bit = 1u << ((d & 1u) * 16u);
+    let word = vec4<u32>(d >> 1u);
+    let zero = vec4<u32>(0u);
+    return Packed(c.lo + select(zero, vec4<u32>(bit), word == vec4<u32>(0u, 1u, 2u, 3u)),
+                  c.hi + select(zero, vec4<u32>(bit), word == vec4<u32>(4u, 5u, 6u, 7u)));
+}
+
+// The count of digit d in `c`.
+fn field(c: Packed, d: u32) -> u32 {
+    let word = d >> 1u;
+    let lane = select(vec4<u32>(0u), vec4<u32>(1u), vec4<u32>(word & 3u) == vec4<u32>(0u, 1u, 2u, 3u));
+    let w = dot(select(c.hi, c.lo, word < 4u), lane);
+    return (w >> ((d & 1u) * 16u)) & 0xffffu;
+}
+
 @compute @workgroup_size(WG)
 fn count_digits(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) lid: u32) {
@@ -60,38 +86,34 @@ fn count_digits(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
         }
         return;
     }
-    if lid < 16u {
+    if lid < 8u {
         atomicStore(&hist[lid], 0u);
     }
-    workgroupBarrier();
+    // Each invocation counts its keys in registers, then adds all its counters to the
+    // block's with eight atomics (one per packed word) instead of one per key.
+    var c = Packed(vec4<u32>(0u), vec4<u32>(0u));
     for (var r = 0u; r < KEYS_PER_THREAD; r++) {
         let idx = block * BLOCK + r * WG + lid;
         if idx < n {
-            atomicAdd(&hist[digit_of(keys_in[idx])], 1u);
+            c = count_digit(c, digit_of(keys_in[idx]));
         }
     }
     workgroupBarrier();
+    for (var w = 0u; w < 4u; w++) {
+        atomicAdd(&hist[w], c.lo[w]);
+        atomicAdd(&hist[w + 4u], c.hi[w]);
+    }
+    workgroupBarrier();
     if lid < 16u {
-        counts[lid * params.num_blocks + block] = atomicLoad(&hist[lid]);
+        let word = atomicLoad(&hist[lid >> 1u]);
+        counts[lid * params.num_blocks + block] = (word >> ((lid & 1u) * 16u)) & 0xffffu;
     }
 }
 
-// One-hot digit vectors: digit d is field (d & 1) (16 bits) of word d >> 1, words 0..3 in
-// `lo`, 4..7 in `hi`. A field counts at most BLOCK = 2048 keys, so 16 bits suffice.
+// The packed counts of the invocations, scanned in place.
 var<workgroup> scan_lo: array<vec4<u32>, WG>;
 var<workgroup> scan_hi: array<vec4<u32>, WG>;
 var<workgroup> digit_base: array<u32, 16>;
-
-fn field(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
-    let word = d >> 1u;
-    var w: u32;
-    if word < 4u {
-        w = lo[word];
-    } else {
-        w = hi[word - 4u];
-    }
-    return (w >> ((d & 1u) * 16u)) & 0xffffu;
-}
 
 // Each invocation takes KEYS_PER_THREAD consecutive keys, counts its digits, and one
 // workgroup scan of those counts gives every key its rank among equal digits of the block:
@@ -114,25 +136,18 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
     let base = block * BLOCK + lid * KEYS_PER_THREAD;
     var keys: array<u32, KEYS_PER_THREAD>;
     var local_rank: array<u32, KEYS_PER_THREAD>;
-    var lo = vec4<u32>(0u);
-    var hi = vec4<u32>(0u);
+    var mine = Packed(vec4<u32>(0u), vec4<u32>(0u));
     for (var i = 0u; i < KEYS_PER_THREAD; i++) {
         if base + i < n {
             let key = keys_in[base + i];
             let d = digit_of(key);
             keys[i] = key;
-            local_rank[i] = field(lo, hi, d);
-            let bit = 1u << ((d & 1u) * 16u);
-            let word = d >> 1u;
-            if word < 4u {
-                lo[word] += bit;
-            } else {
-                hi[word - 4u] += bit;
-            }
+            local_rank[i] = field(mine, d);
+            mine = count_digit(mine, d);
         }
     }
-    scan_lo[lid] = lo;
-    scan_hi[lid] = hi;
+    scan_lo[lid] = mine.lo;
+    scan_hi[lid] = mine.hi;
     workgroupBarrier();
     for (var off = 1u; off < WG; off <<= 1u) {
         var add_lo = vec4<u32>(0u);
@@ -147,12 +162,11 @@ fn scatter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: 
         workgroupBarrier();
     }
     // Exclusive: counts of the invocations before this one.
-    let before_lo = scan_lo[lid] - lo;
-    let before_hi = scan_hi[lid] - hi;
+    let before = Packed(scan_lo[lid] - mine.lo, scan_hi[lid] - mine.hi);
     for (var i = 0u; i < KEYS_PER_THREAD; i++) {
         if base + i < n {
             let d = digit_of(keys[i]);
-            let dest = digit_base[d] + field(before_lo, before_hi, d) + local_rank[i];
+            let dest = digit_base[d] + field(before, d) + local_rank[i];
             keys_out[dest] = keys[i];
             values_out[dest] = values_in[base + i];
         }
