@@ -74,14 +74,19 @@ impl SortPlan {
     }
 }
 
+/// The sort's WGSL with the workgroup shape of `executor` prepended.
+pub fn source(executor: Executor) -> String {
+    let (threads, keys_per_thread) = shape(executor);
+    debug_assert_eq!(threads * keys_per_thread, BLOCK);
+    format!(
+        "const WG: u32 = {threads}u;\nconst KEYS_PER_THREAD: u32 = {keys_per_thread}u;\n{}",
+        include_str!("../../shaders/gpu/radix_sort.wgsl")
+    )
+}
+
 impl RadixSort {
     pub fn new(device: &wgpu::Device, executor: Executor) -> RadixSort {
-        let (threads, keys_per_thread) = shape(executor);
-        debug_assert_eq!(threads * keys_per_thread, BLOCK);
-        let src = format!(
-            "const WG: u32 = {threads}u;\nconst KEYS_PER_THREAD: u32 = {keys_per_thread}u;\n{}",
-            include_str!("../../shaders/gpu/radix_sort.wgsl")
-        );
+        let src = source(executor);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("radix_sort"),
             source: wgpu::ShaderSource::Wgsl(src.into()),
@@ -172,7 +177,7 @@ mod tests {
 
     #[test]
     fn params_match_wgsl() {
-        let src = include_str!("../../shaders/gpu/radix_sort.wgsl");
-        assert_layout!(src, SortParams, "SortParams", [shift, num_blocks]);
+        let src = source(Executor::Gpu);
+        assert_layout!(&src, SortParams, "SortParams", [shift, num_blocks]);
     }
 }
