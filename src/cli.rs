@@ -123,6 +123,13 @@ pub(crate) enum BenchWhat {
         /// Simulate nothing: redraw the tables and charts from OUT/data/*.json.
         #[arg(long)]
         redraw: bool,
+        /// Grid spacings of the shatter study instead of its default ones (metres,
+        /// comma-separated, coarse to fine; finer than 0.01 is meant for a GPU).
+        #[arg(long, value_delimiter = ',')]
+        shatter_dx: Option<Vec<f64>>,
+        /// Directory of the shipped scenes (the shatter study runs watermelon_drop.json).
+        #[arg(long, default_value = "scenes")]
+        scenes: PathBuf,
     },
 }
 
@@ -131,6 +138,8 @@ pub(crate) enum AccuracyPart {
     All,
     Convergence,
     Atlas,
+    /// The flat watermelon drop at several Δx, both return mappings.
+    Shatter,
 }
 
 #[derive(clap::Args)]

@@ -110,19 +110,41 @@ fn run(cli: Cli) -> Result<()> {
                     only,
                     quick,
                     redraw,
+                    scenes,
+                    shatter_dx,
                 },
         }) => {
-            use splatter::study::Part;
+            use splatter::study::{AccuracyOptions, Part};
             if quick && !redraw && out == Path::new("docs") {
                 // The smoke sweeps would overwrite the documented numbers.
                 bail!("--quick runs smoke-sized sweeps: give an --out other than docs");
+            }
+            if let Some(bad) = shatter_dx
+                .iter()
+                .flatten()
+                .find(|dx| !(**dx > 0.0 && dx.is_finite()))
+            {
+                bail!("--shatter-dx {bad}: expected positive grid spacings in metres");
             }
             let part = match only {
                 AccuracyPart::All => Part::All,
                 AccuracyPart::Convergence => Part::Convergence,
                 AccuracyPart::Atlas => Part::Atlas,
+                AccuracyPart::Shatter => Part::Shatter,
             };
-            splatter::study::run_accuracy(part, quick, redraw, &out, &mut std::io::stderr())
+            let simulates_on_gpu = !redraw && matches!(part, Part::All | Part::Shatter);
+            let gpu = simulates_on_gpu
+                .then(|| GpuContext::new(cli.backend))
+                .transpose()?;
+            let opts = AccuracyOptions {
+                part,
+                quick,
+                redraw,
+                gpu: gpu.as_ref(),
+                scenes: &scenes,
+                shatter_dx: shatter_dx.as_deref(),
+            };
+            splatter::study::run_accuracy(&opts, &out, &mut std::io::stderr())
         }
     }
 }

@@ -38,6 +38,36 @@ fn height_extent(points: &[DVec3]) -> f64 {
     at(0.99) - at(0.01)
 }
 
+/// What tells a stable run from one that gains energy: the fastest particle, the kinetic
+/// plus gravitational energy ½ Σ m|v|² − Σ m g·x (joules; elastic energy is not counted, so
+/// it dips during an impact and may never rise above its start in a sound run), and the
+/// particles whose position or velocity is not finite (left out of both).
+struct Motion {
+    speed_max: f64,
+    energy: f64,
+    nonfinite: usize,
+}
+
+impl Motion {
+    fn of(particles: std::ops::Range<usize>, state: &Particles, gravity: DVec3) -> Self {
+        let mut m = Motion {
+            speed_max: 0.0,
+            energy: 0.0,
+            nonfinite: 0,
+        };
+        for i in particles {
+            let (x, v, mass) = (state.x[i], state.v[i], state.mass[i]);
+            if !(x.is_finite() && v.is_finite()) {
+                m.nonfinite += 1;
+                continue;
+            }
+            m.speed_max = m.speed_max.max(v.length());
+            m.energy += 0.5 * mass * v.length_squared() - mass * gravity.dot(x);
+        }
+        m
+    }
+}
+
 /// How a body's Gaussians follow its fragments (the derive pass's f64 twin, on the state
 /// read back).
 struct GaussianFragments {
@@ -122,7 +152,7 @@ impl FragmentLog {
         if !append {
             writeln!(
                 file,
-                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray"
+                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray,speed_max,energy,nonfinite"
             )?;
         }
         Ok(Self {
@@ -152,6 +182,7 @@ impl FragmentLog {
                 })
                 .count();
             let height = height_extent(&points);
+            let motion = Motion::of(body.particles.clone(), state, s.params.gravity);
             let ids = fragment_ids(&points, s.grid.dx);
             let look = GaussianFragments::new(body, &points, &ids, state, s);
             let summary = FragmentSummary::new(&sizes_of(&ids), PIECE_SHARE)
@@ -163,7 +194,7 @@ impl FragmentLog {
             let name = csv_field(&name);
             writeln!(
                 self.file,
-                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4},{},{:.4},{:.4},{}",
+                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4},{},{:.4},{:.4},{},{:.4},{:.6e},{}",
                 summary.particles,
                 summary.pieces,
                 summary.largest_share,
@@ -174,6 +205,9 @@ impl FragmentLog {
                 look.largest_share,
                 look.stretch,
                 look.astray,
+                motion.speed_max,
+                motion.energy,
+                motion.nonfinite,
             )?;
             self.last.push((name, frame, summary));
         }

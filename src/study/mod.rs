@@ -9,7 +9,9 @@ pub mod chart;
 pub mod convergence;
 pub mod fit;
 pub mod runner;
+pub mod shatter;
 pub mod suite;
+pub mod table_a1;
 pub mod tables;
 
 use std::io::Write;
@@ -25,27 +27,46 @@ pub enum Part {
     All,
     Convergence,
     Atlas,
+    Shatter,
 }
 
-/// Runs the study parts and writes OUT/data/{convergence,atlas}.{json,md} and
-/// OUT/images/{convergence_dx,convergence_pareto,atlas}.png. With `redraw`, nothing is
-/// simulated: the tables and charts are made again from the JSON files already there.
-pub fn run_accuracy(
-    part: Part,
-    quick: bool,
-    redraw: bool,
-    out: &Path,
-    log: &mut dyn Write,
-) -> Result<()> {
-    if redraw {
-        return redraw_from_json(part, out);
+impl Part {
+    fn runs(self, part: Part) -> bool {
+        self == Part::All || self == part
     }
+}
+
+/// What `bench accuracy` is given: the part, the sizes, and for the shatter study the
+/// adapter and the directory of the shipped scenes.
+pub struct AccuracyOptions<'a> {
+    pub part: Part,
+    pub quick: bool,
+    pub redraw: bool,
+    pub gpu: Option<&'a crate::gpu::GpuContext>,
+    pub scenes: &'a Path,
+    /// The shatter study's grid spacings, if not its defaults.
+    pub shatter_dx: Option<&'a [f64]>,
+}
+
+/// Runs the study parts and writes OUT/data/{convergence,atlas,shatter}.{json,md},
+/// OUT/data/table_a1.md and OUT/images/{convergence_dx,convergence_pareto,atlas,shatter}.png.
+/// With `redraw`, nothing is simulated: the tables and charts are made again from the JSON
+/// files already there.
+pub fn run_accuracy(opts: &AccuracyOptions, out: &Path, log: &mut dyn Write) -> Result<()> {
+    let (part, quick) = (opts.part, opts.quick);
     let data = out.join("data");
     let images = out.join("images");
     std::fs::create_dir_all(&data)?;
     std::fs::create_dir_all(&images)?;
+    std::fs::write(
+        data.join("table_a1.md"),
+        table_a1::markdown(&table_a1::cfl_rows()),
+    )?;
+    if opts.redraw {
+        return redraw_from_json(part, out);
+    }
     let started = Instant::now();
-    if part != Part::Atlas {
+    if part.runs(Part::Convergence) {
         let report = convergence::run_convergence(convergence::ConvOptions { quick }, &mut |r| {
             let _ = writeln!(
                 log,
@@ -68,7 +89,7 @@ pub fn run_accuracy(
             )?;
         }
     }
-    if part != Part::Convergence {
+    if part.runs(Part::Atlas) {
         let report = atlas::run_atlas(quick, &mut |r| {
             let _ = writeln!(
                 log,
@@ -88,6 +109,34 @@ pub fn run_accuracy(
         std::fs::write(data.join("atlas.md"), tables::atlas_markdown(&report))?;
         tables::atlas_chart(&report, &images.join("atlas.png"))?;
     }
+    if part.runs(Part::Shatter) {
+        let gpu = opts
+            .gpu
+            .ok_or_else(|| anyhow::anyhow!("the shatter study needs an adapter"))?;
+        let dxs = opts.shatter_dx.unwrap_or(if quick {
+            &shatter::DX_QUICK
+        } else {
+            &shatter::DX_FULL
+        });
+        let report = shatter::run_shatter(gpu, (opts.scenes, &images), dxs, quick, &mut |r| {
+            let _ = writeln!(
+                log,
+                "shatter dx {} {}: {} pieces, largest {:.1}%, damaged {:.1}%, speed ratio {:.2}, energy ratio {:.3}, non-finite {}, {:.0} s",
+                r.dx,
+                r.mapping,
+                r.pieces,
+                100.0 * r.largest_share,
+                100.0 * r.damaged_share,
+                r.speed_ratio,
+                r.energy_ratio,
+                r.nonfinite,
+                r.wall_s
+            );
+        })?;
+        let report: shatter::ShatterReport = round_trip(&report, &data.join("shatter.json"))?;
+        std::fs::write(data.join("shatter.md"), tables::shatter_markdown(&report))?;
+        tables::shatter_chart(&report, &images.join("shatter.png"))?;
+    }
     writeln!(
         log,
         "wrote {} and {} in {:.0} s",
@@ -101,7 +150,7 @@ pub fn run_accuracy(
 fn redraw_from_json(part: Part, out: &Path) -> Result<()> {
     let (data, images) = (out.join("data"), out.join("images"));
     std::fs::create_dir_all(&images)?;
-    if part != Part::Atlas {
+    if part.runs(Part::Convergence) {
         let text = std::fs::read_to_string(data.join("convergence.json"))?;
         let report: convergence::ConvergenceReport = serde_json::from_str(&text)?;
         std::fs::write(
@@ -110,11 +159,17 @@ fn redraw_from_json(part: Part, out: &Path) -> Result<()> {
         )?;
         tables::convergence_charts(&report, &images)?;
     }
-    if part != Part::Convergence {
+    if part.runs(Part::Atlas) {
         let text = std::fs::read_to_string(data.join("atlas.json"))?;
         let report: atlas::AtlasReport = serde_json::from_str(&text)?;
         std::fs::write(data.join("atlas.md"), tables::atlas_markdown(&report))?;
         tables::atlas_chart(&report, &images.join("atlas.png"))?;
+    }
+    if part.runs(Part::Shatter) {
+        let text = std::fs::read_to_string(data.join("shatter.json"))?;
+        let report: shatter::ShatterReport = serde_json::from_str(&text)?;
+        std::fs::write(data.join("shatter.md"), tables::shatter_markdown(&report))?;
+        tables::shatter_chart(&report, &images.join("shatter.png"))?;
     }
     Ok(())
 }

@@ -11,6 +11,7 @@ use super::atlas::{AtlasReport, Class};
 use super::chart::{cell_map, loglog, Cell, Series};
 use super::convergence::{ConvRun, ConvergenceReport};
 use super::fit::pareto_front;
+use super::shatter::{ShatterReport, ShatterRun};
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), |x| format!("{x:.4e}"))
@@ -267,6 +268,68 @@ pub fn atlas_chart(r: &AtlasReport, path: &Path) -> Result<()> {
         &cols,
         &cells,
         &classes,
+    )
+}
+
+/// One row per run of the shatter study, finest Δx last.
+pub fn shatter_markdown(r: &ShatterReport) -> String {
+    let mut s = format!(
+        "`{}`, last frame of each run (`--fragments`: pieces hold ≥ 1% of the particles).\n\n\
+         | Δx (m) | mapping | particles | pieces | largest | damaged | fragments | max speed / drop speed | max energy / start | non-finite | wall s |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+        r.scene
+    );
+    for x in &r.runs {
+        s += &format!(
+            "| {} | {} | {} | {} | {:.1}% | {:.1}% | {} | {:.2} | {:.3} | {} | {:.0} |\n",
+            x.dx,
+            x.mapping,
+            x.particles,
+            x.pieces,
+            100.0 * x.largest_share,
+            100.0 * x.damaged_share,
+            x.fragments,
+            x.speed_ratio,
+            x.energy_ratio,
+            x.nonfinite,
+            x.wall_s
+        );
+    }
+    s
+}
+
+/// What the shatter chart plots of a run.
+type Measure = fn(&ShatterRun) -> f64;
+
+/// Pieces, largest share and damaged share against Δx, one colour per mapping.
+pub fn shatter_chart(r: &ShatterReport, path: &Path) -> Result<()> {
+    let mut series = Vec::new();
+    for (m, mapping) in super::shatter::MAPPINGS.iter().enumerate() {
+        let runs: Vec<&ShatterRun> = r.runs.iter().filter(|x| x.mapping == *mapping).collect();
+        let measures: [(&str, Measure); 3] = [
+            ("pieces", |x| x.pieces as f64),
+            ("largest share", |x| x.largest_share),
+            ("damaged share", |x| x.damaged_share),
+        ];
+        for (k, (name, f)) in measures.iter().enumerate() {
+            series.push(Series {
+                label: format!("{name} ({mapping})"),
+                points: runs.iter().map(|x| (x.dx, f(x))).collect(),
+                line: true,
+                markers: true,
+                color: 3 * m + k,
+            });
+        }
+    }
+    loglog(
+        path,
+        (
+            "Watermelon dropped on a table: last frame against grid spacing",
+            "Δx (m)",
+            "pieces / share",
+        ),
+        &series,
+        SeriesLabelPosition::UpperLeft,
     )
 }
 
