@@ -88,42 +88,102 @@ pub fn loglog(
             .label_style(("sans-serif", 14))
             .draw()
             .map_err(plot_err)?;
-        for s in series {
-            let color = palette(s.color);
-            let pts: Vec<(f64, f64)> = s
-                .points
-                .iter()
-                .copied()
-                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-                .collect();
-            if s.line {
-                chart
-                    .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
-                    .map_err(plot_err)?
+        draw_series(&mut chart, series, legend, |(x, y)| *x > 0.0 && *y > 0.0)?;
+        root.present().map_err(plot_err)?;
+    }
+    save_rgb(path, w, h, &buf)
+}
+
+/// The series and their legend on a chart of any axes; `keep` drops points the axes
+/// cannot show (non-positive ones on a log axis).
+fn draw_series<'a, DB, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    series: &[Series],
+    legend: SeriesLabelPosition,
+    keep: impl Fn(&(f64, f64)) -> bool,
+) -> Result<()>
+where
+    DB: DrawingBackend + 'a,
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for s in series {
+        let color = palette(s.color);
+        let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(&keep).collect();
+        if s.line {
+            chart
+                .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))
+                .map_err(plot_err)?
+                .label(&s.label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        if s.markers {
+            let series = chart
+                .draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))
+                .map_err(plot_err)?;
+            if !s.line {
+                series
                     .label(&s.label)
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
-                    });
-            }
-            if s.markers {
-                let series = chart
-                    .draw_series(pts.iter().map(|p| Circle::new(*p, 4, color.filled())))
-                    .map_err(plot_err)?;
-                if !s.line {
-                    series
-                        .label(&s.label)
-                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
-                }
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, color.filled()));
             }
         }
+    }
+    chart
+        .configure_series_labels()
+        .position(legend)
+        .label_font(("sans-serif", 14))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(plot_err)?;
+    Ok(())
+}
+
+/// A chart of `series` on linear axes from zero, written to `path` as PNG: for data
+/// spanning less than a decade, where a log axis would show no tick.
+pub fn lines(
+    path: &Path,
+    (title, x_desc, y_desc): (&str, &str, &str),
+    series: &[Series],
+    legend: SeriesLabelPosition,
+) -> Result<()> {
+    register_font();
+    let (w, h) = (900u32, 600u32);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        let pts = || {
+            series
+                .iter()
+                .flat_map(|s| s.points.iter())
+                .filter(|(x, y)| x.is_finite() && y.is_finite())
+        };
+        let x1 = pts()
+            .map(|p| p.0)
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE)
+            * 1.15;
+        // Headroom above the data for the legend.
+        let y1 = pts().map(|p| p.1).fold(1.0, f64::max) * 1.6;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(46)
+            .y_label_area_size(80)
+            .build_cartesian_2d(0.0..x1, 0.0..y1)
+            .map_err(plot_err)?;
         chart
-            .configure_series_labels()
-            .position(legend)
-            .label_font(("sans-serif", 14))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_labels(8)
+            .label_style(("sans-serif", 14))
             .draw()
             .map_err(plot_err)?;
+        draw_series(&mut chart, series, legend, |_| true)?;
         root.present().map_err(plot_err)?;
     }
     save_rgb(path, w, h, &buf)

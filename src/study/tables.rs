@@ -8,7 +8,7 @@ use plotters::prelude::SeriesLabelPosition;
 use plotters::style::RGBColor;
 
 use super::atlas::{AtlasReport, Class};
-use super::chart::{cell_map, loglog, Cell, Series};
+use super::chart::{cell_map, lines, loglog, Cell, Series};
 use super::convergence::{ConvRun, ConvergenceReport};
 use super::fit::pareto_front;
 use super::shatter::{ShatterReport, ShatterRun};
@@ -321,7 +321,7 @@ pub fn shatter_chart(r: &ShatterReport, path: &Path) -> Result<()> {
             });
         }
     }
-    loglog(
+    lines(
         path,
         (
             "Watermelon dropped on a table: last frame against grid spacing",
