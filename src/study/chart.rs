@@ -64,14 +64,9 @@ pub fn loglog(
     series: &[Series],
     legend: SeriesLabelPosition,
 ) -> Result<()> {
-    register_font();
-    let (w, h) = (900u32, 600u32);
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
+    draw_png(path, (900, 600), |root| {
         let ((x0, x1), (y0, y1)) = log_bounds(series);
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(46)
@@ -89,9 +84,8 @@ pub fn loglog(
             .draw()
             .map_err(plot_err)?;
         draw_series(&mut chart, series, legend, |(x, y)| *x > 0.0 && *y > 0.0)?;
-        root.present().map_err(plot_err)?;
-    }
-    save_rgb(path, w, h, &buf)
+        Ok(())
+    })
 }
 
 /// The series and their legend on a chart of any axes; `keep` drops points the axes
@@ -149,12 +143,7 @@ pub fn lines(
     series: &[Series],
     legend: SeriesLabelPosition,
 ) -> Result<()> {
-    register_font();
-    let (w, h) = (900u32, 600u32);
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
+    draw_png(path, (900, 600), |root| {
         let pts = || {
             series
                 .iter()
@@ -168,7 +157,7 @@ pub fn lines(
             * 1.15;
         // Headroom above the data for the legend.
         let y1 = pts().map(|p| p.1).fold(1.0, f64::max) * 1.6;
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(root)
             .caption(title, ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(46)
@@ -184,9 +173,8 @@ pub fn lines(
             .draw()
             .map_err(plot_err)?;
         draw_series(&mut chart, series, legend, |_| true)?;
-        root.present().map_err(plot_err)?;
-    }
-    save_rgb(path, w, h, &buf)
+        Ok(())
+    })
 }
 
 /// One cell of a classification map: a colour class and a short text.
@@ -205,14 +193,10 @@ pub fn cell_map(
     cells: &[Vec<Cell>],
     classes: &[(&str, RGBColor)],
 ) -> Result<()> {
-    register_font();
     let (label_w, head_h, cell_w, cell_h) = (230i32, 70i32, 140i32, 30i32);
     let w = (label_w + cell_w * col_labels.len() as i32 + 20) as u32;
     let h = (head_h + cell_h * row_labels.len() as i32 + 60) as u32;
-    let mut buf = vec![0u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(plot_err)?;
+    draw_png(path, (w, h), |root| {
         let font = |size: i32| ("sans-serif", size).into_font().color(&BLACK);
         root.draw(&Text::new(title, (10, 8), font(15)))
             .map_err(plot_err)?;
@@ -245,6 +229,22 @@ pub fn cell_map(
             root.draw(&Text::new(*name, (x + 26, y + 2), font(13)))
                 .map_err(plot_err)?;
         }
+        Ok(())
+    })
+}
+
+/// A white `w`×`h` bitmap handed to `draw`, then written to `path` as PNG.
+fn draw_png(
+    path: &Path,
+    (w, h): (u32, u32),
+    draw: impl FnOnce(&DrawingArea<BitMapBackend, plotters::coord::Shift>) -> Result<()>,
+) -> Result<()> {
+    register_font();
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(plot_err)?;
+        draw(&root)?;
         root.present().map_err(plot_err)?;
     }
     save_rgb(path, w, h, &buf)
