@@ -57,6 +57,20 @@ fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("chart: {e:?}")
 }
 
+/// The frame both line charts share: caption, margin and label areas.
+fn framed<'a, 'b>(
+    root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
+    title: &str,
+) -> ChartBuilder<'a, 'b, BitMapBackend<'b>> {
+    let mut builder = ChartBuilder::on(root);
+    builder
+        .caption(title, ("sans-serif", 22))
+        .margin(16)
+        .x_label_area_size(46)
+        .y_label_area_size(80);
+    builder
+}
+
 /// A log-log chart of `series` written to `path` as PNG.
 pub fn loglog(
     path: &Path,
@@ -66,11 +80,7 @@ pub fn loglog(
 ) -> Result<()> {
     draw_png(path, (900, 600), |root| {
         let ((x0, x1), (y0, y1)) = log_bounds(series);
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 22))
-            .margin(16)
-            .x_label_area_size(46)
-            .y_label_area_size(80)
+        let mut chart = framed(root, title)
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
             .map_err(plot_err)?;
         chart
@@ -157,11 +167,7 @@ pub fn lines(
             * 1.15;
         // Headroom above the data for the legend.
         let y1 = pts().map(|p| p.1).fold(1.0, f64::max) * 1.6;
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 22))
-            .margin(16)
-            .x_label_area_size(46)
-            .y_label_area_size(80)
+        let mut chart = framed(root, title)
             .build_cartesian_2d(0.0..x1, 0.0..y1)
             .map_err(plot_err)?;
         chart
