@@ -23,6 +23,10 @@ struct Projected {
     color: vec4<f32>,
 }
 
+// Depth key of a culled Gaussian (project.wgsl): it sorts after every visible one, touches
+// no tile and is not shaded.
+const CULLED_KEY: u32 = 0xffffffffu;
+
 // Per-frame constants, written once per frame.
 struct Frame {
     // world-to-camera rotation, rows 0..2 in xyz (w unused)

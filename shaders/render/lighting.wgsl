@@ -86,3 +86,41 @@ fn oct_encode(n: vec3<f32>) -> u32 {
 fn voxel_index(v: vec3<u32>, res: vec3<u32>) -> u32 {
     return v.x + res.x * (v.y + res.y * v.z);
 }
+
+// The normal a visible Gaussian is shaded with, seen along v (towards the eye). Two-sided: a
+// visible surface faces the camera, so a normal pointing away is a wrongly oriented one
+// (PCA cannot always tell the sides of a thin sheet or a concave patch apart) and is
+// flipped. Correct normals are unaffected.
+fn facing_normal(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, dot(n, v) < 0.0);
+}
+
+// Where a Gaussian at p with shading normal n looks up a light's transmittance: p moved two
+// voxels toward the light at `light_pos` and 1.5 voxels along n (so that a Gaussian and the
+// surface it lies on do not shadow themselves, also at grazing light), in voxel-centre
+// coordinates; sampled trilinearly from the 8 voxels lo + {0,1}³ with fractions f. Outside
+// the volume (`inside` false) nothing is in the way. The shade pass reads these voxels and
+// the mark pass (shadow_mark.wgsl) asks for exactly them.
+struct ShadowLookup {
+    inside: bool,
+    lo: vec3<f32>,
+    f: vec3<f32>,
+}
+
+fn shadow_lookup(light_pos: vec3<f32>, p: vec3<f32>, n: vec3<f32>, lo_h: vec4<f32>,
+                 res: vec3<u32>) -> ShadowLookup {
+    let h = lo_h.w;
+    let l = normalize(light_pos - p);
+    let x = (p + l * (2.0 * h) + n * (1.5 * h) - lo_h.xyz) / h - 0.5;
+    let hi = vec3<f32>(res) - 1.0;
+    var out: ShadowLookup;
+    out.inside = !(any(x < vec3<f32>(0.0)) || any(x > hi));
+    out.lo = min(floor(x), hi - 1.0);
+    out.f = x - out.lo;
+    return out;
+}
+
+// Corner k ∈ [0, 8) of a trilinear cell, x fastest.
+fn cell_corner(k: u32) -> vec3<f32> {
+    return vec3<f32>(f32(k & 1u), f32((k >> 1u) & 1u), f32(k >> 2u));
+}

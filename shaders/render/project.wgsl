@@ -18,8 +18,6 @@
 @group(0) @binding(7) var<storage, read_write> stats: Stats;
 @group(0) @binding(8) var<storage, read> page: PageRange;
 
-// Culled Gaussians sort after every visible one and touch no tile.
-const CULLED_KEY: u32 = 0xffffffffu;
 
 fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     // Rotate v by q⁻¹ (q unit, xyzw): v + 2 w (v × u) + 2 u × (u × v)... with u = -q.xyz.

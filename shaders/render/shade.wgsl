@@ -1,8 +1,7 @@
 // Relighting (per visible Gaussian, after project.wgsl): replace the SH colour c0 by its
 // Blinn-Phong shading under the frame's point lights (lighting.wgsl), each light's term
-// weighted by its visibility T, sampled trilinearly from the transmittance volume at the
-// centre moved two voxels toward the light and 1.5 voxels along the normal (so that a
-// Gaussian and the surface it lies on do not shadow themselves, also at grazing light).
+// weighted by its visibility T, sampled trilinearly from the transmittance volume where
+// `shadow_lookup` says (the voxels shadow_mark.wgsl asked shadow_transmit.wgsl for).
 // Gaussians without a normal keep c0 under the ambient term only. Mirrors
 // `relight::blinn_phong` and `relight::shadow::ShadowVolume::visibility`.
 
@@ -16,28 +15,21 @@
 @group(0) @binding(6) var<storage, read> depth_keys: array<u32>;
 @group(0) @binding(7) var<storage, read_write> projected: array<Projected>;
 
-const CULLED_KEY: u32 = 0xffffffffu;
-
 fn visibility(light: u32, p: vec3<f32>, n: vec3<f32>) -> f32 {
     if lights.shadows == 0u {
         return 1.0;
     }
     let res = lights.volume_res.xyz;
-    let h = lights.volume_lo_h.w;
-    let l = normalize(lights.position[light].xyz - p);
-    let x = (p + l * (2.0 * h) + n * (1.5 * h) - lights.volume_lo_h.xyz) / h - 0.5;
-    let hi = vec3<f32>(res) - 1.0;
-    if any(x < vec3<f32>(0.0)) || any(x > hi) {
-        return 1.0; // outside the volume nothing is in the way
+    let at = shadow_lookup(lights.position[light].xyz, p, n, lights.volume_lo_h, res);
+    if !at.inside {
+        return 1.0;
     }
-    let lo = min(floor(x), hi - 1.0);
-    let f = x - lo;
     let base = light * res.x * res.y * res.z;
     var t = 0.0;
     for (var k = 0u; k < 8u; k++) {
-        let o = vec3<f32>(f32(k & 1u), f32((k >> 1u) & 1u), f32(k >> 2u));
-        let w = select(1.0 - f, f, o == vec3<f32>(1.0));
-        t += w.x * w.y * w.z * transmittance[base + voxel_index(vec3<u32>(lo + o), res)];
+        let o = cell_corner(k);
+        let w = select(1.0 - at.f, at.f, o == vec3<f32>(1.0));
+        t += w.x * w.y * w.z * transmittance[base + voxel_index(vec3<u32>(at.lo + o), res)];
     }
     return t;
 }
@@ -57,12 +49,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     var out = m.ambient * c0 * lights.ambient.xyz;
     if any(n != vec3<f32>(0.0)) {
         let v = normalize(frame.camera_near.xyz - p);
-        // Two-sided: a visible surface faces the camera, so a normal pointing away is a
-        // wrongly oriented one (PCA cannot always tell the sides of a thin sheet or a
-        // concave patch apart) and is flipped. Correct normals are unaffected.
-        if dot(n, v) < 0.0 {
-            n = -n;
-        }
+        n = facing_normal(n, v);
         for (var i = 0u; i < lights.count; i++) {
             out += light_term(c0, p, n, v, m, lights.position[i].xyz, lights.radiance[i].xyz,
                               visibility(i, p, n));

@@ -1,7 +1,9 @@
-// Shadows, pass 2 (per voxel and light): the transmittance T = exp(−∫ σ ds) from the voxel's
-// centre to the light through the optical-depth volume, marched in steps of one voxel with
-// trilinear samples, stopping where the ray leaves the volume (nothing outside casts
-// shadows) or once the light is blocked (τ > OPAQUE). Mirrors `relight::shadow::transmittance`.
+// Shadows, pass 3 (per voxel and light that shadow_mark.wgsl asked for, by indirect
+// dispatch): the transmittance T = exp(−∫ σ ds) from the voxel's centre to the light
+// through the optical-depth volume, marched in steps of one voxel with trilinear samples,
+// stopping where the ray leaves the volume (nothing outside casts shadows) or once the
+// light is blocked (τ > OPAQUE). Voxels nobody asked for keep stale values, which nothing
+// reads. Mirrors `relight::shadow::transmittance`.
 
 // exp(−12) ≈ 6e-6: no visible light gets through.
 const OPAQUE: f32 = 12.0;
@@ -10,6 +12,9 @@ const OPAQUE: f32 = 12.0;
 @group(0) @binding(1) var<storage, read> depth: array<u32>;
 // T per voxel, light-major: [light · voxels + voxel]
 @group(0) @binding(2) var<storage, read_write> transmittance: array<f32>;
+// What shadow_mark.wgsl asked for: (light · voxels + voxel) indices, and their count at [3].
+@group(0) @binding(3) var<storage, read> asked_list: array<u32>;
+@group(0) @binding(4) var<storage, read> transmit_args: array<u32, 4>;
 
 fn depth_at(x: vec3<f32>, res: vec3<u32>) -> f32 {
     // x in voxel-centre coordinates; trilinear, zero outside.
@@ -17,7 +22,7 @@ fn depth_at(x: vec3<f32>, res: vec3<u32>) -> f32 {
     let f = x - lo;
     var sum = 0.0;
     for (var k = 0u; k < 8u; k++) {
-        let o = vec3<f32>(f32(k & 1u), f32((k >> 1u) & 1u), f32(k >> 2u));
+        let o = cell_corner(k);
         let c = lo + o;
         if any(c < vec3<f32>(0.0)) || any(c >= vec3<f32>(res)) {
             continue;
@@ -31,12 +36,13 @@ fn depth_at(x: vec3<f32>, res: vec3<u32>) -> f32 {
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = flat_workgroup(wid, nwg) * 256u + lid;
-    let res = lights.volume_res.xyz;
-    let voxels = res.x * res.y * res.z;
-    if i >= voxels * lights.count {
+    let item = flat_workgroup(wid, nwg) * 256u + lid;
+    if item >= transmit_args[3] {
         return;
     }
+    let i = asked_list[item];
+    let res = lights.volume_res.xyz;
+    let voxels = res.x * res.y * res.z;
     let light = i / voxels;
     let v = i % voxels;
     let cell = vec3<u32>(v % res.x, (v / res.x) % res.y, v / (res.x * res.y));

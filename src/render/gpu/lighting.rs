@@ -1,8 +1,9 @@
 //! Relighting on the GPU (docs/method.md §8, docs/relighting.md): the shadow volume
-//! (`shaders/render/shadow_splat.wgsl`, `shadow_transmit.wgsl`) and the Blinn-Phong shade
+//! (`shaders/render/shadow_splat.wgsl`, `shadow_mark.wgsl`, `shadow_transmit.wgsl`: the
+//! transmittance only of the voxels the shade pass will read) and the Blinn-Phong shade
 //! pass (`shade.wgsl`), all sharing `shaders/render/lighting.wgsl`. The renderer runs the
-//! shadow passes before projecting and the shade pass right after, so the rasteriser
-//! composites shaded colours. CPU twins: [`crate::relight`].
+//! shadow passes and the shade pass right after projecting (which culls), so the
+//! rasteriser composites shaded colours. CPU twins: [`crate::relight`].
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -59,6 +60,7 @@ pub struct LightingSetup {
 pub(crate) struct Lighting {
     pub shade: Kernel,
     pub splat: Kernel,
+    pub mark: Kernel,
     pub transmit: Kernel,
     pub lights: wgpu::Buffer,
     pub materials: wgpu::Buffer,
@@ -66,6 +68,12 @@ pub(crate) struct Lighting {
     pub shading: wgpu::Buffer,
     pub depth: wgpu::Buffer,
     pub transmittance: wgpu::Buffer,
+    /// Per light and voxel, whether the shade pass reads it this frame (`shadow_mark.wgsl`).
+    pub asked: wgpu::Buffer,
+    /// The asked (light, voxel) pairs as transmittance indices.
+    pub asked_list: wgpu::Buffer,
+    /// Indirect dispatch of the transmittance pass over `asked_list`, and its length.
+    pub transmit_args: wgpu::Buffer,
     pub count: wgpu::Buffer,
     pub grid: Option<VolumeGrid>,
     pub ambient: Vec3,
@@ -146,6 +154,11 @@ impl Lighting {
                 "shadow_splat",
                 include_str!("../../../shaders/render/shadow_splat.wgsl"),
             ),
+            mark: kernel(
+                device,
+                "shadow_mark",
+                include_str!("../../../shaders/render/shadow_mark.wgsl"),
+            ),
             transmit: kernel(
                 device,
                 "shadow_transmit",
@@ -156,6 +169,16 @@ impl Lighting {
             shading: init("shading", &shading_bytes),
             depth: zeroed("shadow optical depth", voxels * 4),
             transmittance: zeroed("shadow transmittance", transmittance_bytes),
+            asked: zeroed("shadow voxels asked", transmittance_bytes),
+            asked_list: zeroed("shadow voxels asked, listed", transmittance_bytes),
+            transmit_args: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("shadow transmittance dispatch"),
+                size: 16,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::INDIRECT
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             count: init("lighting count", bytemuck::bytes_of(&[count, 0, 0, 0])),
             grid: setup.shadows,
             ambient: setup.ambient,
@@ -181,14 +204,6 @@ impl Lighting {
             u.volume_res = g.res.extend(0).to_array();
         }
         u
-    }
-
-    /// Voxels × lights of the transmittance pass this frame.
-    pub fn transmit_items(&self) -> u32 {
-        match self.grid {
-            Some(g) => (g.voxels() * self.frame_lights.len().min(self.max_lights)) as u32,
-            None => 0,
-        }
     }
 }
 

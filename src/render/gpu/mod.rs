@@ -756,9 +756,29 @@ impl GpuRenderer {
             splat: l
                 .splat
                 .bind(device, &[&l.lights, &s.gaussians, &l.depth, &l.count]),
-            transmit: l
-                .transmit
-                .bind(device, &[&l.lights, &l.depth, &l.transmittance]),
+            mark: l.mark.bind(
+                device,
+                &[
+                    &self.frame,
+                    &l.lights,
+                    &s.gaussians,
+                    &l.shading,
+                    &s.depth_keys,
+                    &l.asked,
+                    &l.asked_list,
+                    &l.transmit_args,
+                ],
+            ),
+            transmit: l.transmit.bind(
+                device,
+                &[
+                    &l.lights,
+                    &l.depth,
+                    &l.transmittance,
+                    &l.asked_list,
+                    &l.transmit_args,
+                ],
+            ),
             shade: l.shade.bind(
                 device,
                 &[
@@ -798,18 +818,9 @@ impl GpuRenderer {
             .filter(|_| s.count > 0)
             .map(|l| self.lighting_binds(gpu, l));
         let mut stages: Vec<Stage> = Vec::new();
-        if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
+        if let Some(l) = &self.lighting {
             gpu.queue
                 .write_buffer(&l.lights, 0, bytemuck::bytes_of(&l.uniforms()));
-            if l.grid.is_some() {
-                let items = l.transmit_items();
-                stages.push(Stage::new("shadows", move |c| {
-                    l.splat.dispatch(c, &b.splat, groups);
-                    if items > 0 {
-                        l.transmit.dispatch(c, &b.transmit, items.div_ceil(256));
-                    }
-                }));
-            }
         }
         if s.count > 0 {
             stages.push(Stage::new("project", |c| {
@@ -820,6 +831,15 @@ impl GpuRenderer {
             }));
         }
         if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
+            if l.grid.is_some() {
+                // After the projection, which culls: only what is shaded asks for shadows.
+                stages.push(Stage::new("shadows", move |c| {
+                    l.splat.dispatch(c, &b.splat, groups);
+                    l.mark.dispatch(c, &b.mark, groups);
+                    l.transmit
+                        .dispatch_indirect(c, &b.transmit, &l.transmit_args, 0);
+                }));
+            }
             stages.push(Stage::new("shade", move |c| {
                 l.shade.dispatch(c, &b.shade, groups)
             }));
@@ -858,6 +878,8 @@ impl GpuRenderer {
         enc.clear_buffer(&f.ranges, 0, None);
         if let Some(l) = self.lighting.as_ref().filter(|l| l.grid.is_some()) {
             enc.clear_buffer(&l.depth, 0, None);
+            enc.clear_buffer(&l.asked, 0, None);
+            enc.clear_buffer(&l.transmit_args, 0, None);
         }
         if s.count == 0 {
             enc.clear_buffer(&f.key_count, 0, None);
@@ -917,6 +939,7 @@ impl GpuRenderer {
 
 struct LightingBinds {
     splat: wgpu::BindGroup,
+    mark: wgpu::BindGroup,
     transmit: wgpu::BindGroup,
     shade: wgpu::BindGroup,
 }
