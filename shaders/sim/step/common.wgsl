@@ -210,6 +210,50 @@ fn node_index(i: vec3<u32>) -> u32 {
     return slot * BLOCK_NODES + l.x + BLOCK * (l.y + BLOCK * l.z);
 }
 
+// The pool slots of the blocks holding the 3×3×3 nodes of a stencil from `base` (at most
+// 2 per axis), looked up once per particle: the transfers visit 27 nodes, and a lookup per
+// node (node_index) is a load from the block table each, which cost as much as the grid
+// reads themselves on a CPU driver.
+struct StencilBlocks {
+    base: vec3<u32>,
+    // slot of block stencil_block_lo(base) + (a, b, c), a, b, c ∈ {0, 1} (the second where
+    // the stencil crosses into the next block on that axis): near[a + 2b] for c = 0,
+    // far[a + 2b] for c = 1
+    near: vec4<u32>,
+    far: vec4<u32>,
+}
+
+fn block_slot_at(b: vec3<u32>) -> u32 {
+    return block_slot[block_index(b)];
+}
+
+fn stencil_blocks(base: vec3<u32>) -> StencilBlocks {
+    let lo = stencil_block_lo(base);
+    let hi = stencil_block_hi(base);
+    var s: StencilBlocks;
+    s.base = base;
+    s.near = vec4<u32>(block_slot_at(lo), block_slot_at(vec3<u32>(hi.x, lo.y, lo.z)),
+                       block_slot_at(vec3<u32>(lo.x, hi.y, lo.z)),
+                       block_slot_at(vec3<u32>(hi.x, hi.y, lo.z)));
+    s.far = vec4<u32>(block_slot_at(vec3<u32>(lo.x, lo.y, hi.z)),
+                      block_slot_at(vec3<u32>(hi.x, lo.y, hi.z)),
+                      block_slot_at(vec3<u32>(lo.x, hi.y, hi.z)), block_slot_at(hi));
+    return s;
+}
+
+// node_index of stencil node base + off, off ∈ {0, 1, 2}³, from the stencil's blocks.
+fn stencil_node(s: StencilBlocks, off: vec3<u32>) -> u32 {
+    let i = s.base + off;
+    let far = i / BLOCK != s.base / BLOCK;
+    let row = select(s.near, s.far, far.z);
+    let slot = select(select(row.x, row.y, far.x), select(row.z, row.w, far.x), far.y);
+    if slot == NO_SLOT {
+        return NO_SLOT;
+    }
+    let l = i % BLOCK;
+    return slot * BLOCK_NODES + l.x + BLOCK * (l.y + BLOCK * l.z);
+}
+
 // The number of listed active blocks: those that got a pool slot.
 fn listed_blocks(count: u32) -> u32 {
     return min(count, step.pool_blocks);

@@ -8,7 +8,10 @@
 @group(0) @binding(4) var<storage, read_write> affine_velocity: array<mat3x3<f32>>;
 @group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
 @group(0) @binding(6) var<storage, read> material: array<u32>;
-@group(0) @binding(7) var<storage, read> grid: array<vec4<f32>>;
+// The grid pool's nodes (common.wgsl, node_index) as 4 floats each: velocity x, y, z and
+// mass; read as scalars, as G2P needs only the velocity (a CPU driver gathers each
+// component a lane reads, so the unused mass would cost a fourth more).
+@group(0) @binding(7) var<storage, read> grid: array<f32>;
 // The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
 // F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
@@ -44,12 +47,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     let s = st.s;
     let base = vec3<u32>(s.base);
+    let blocks = stencil_blocks(base);
     var vp = vec3<f32>(0.0);
     var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
-        let i = base + off;
-        let vi = grid[node_index(i)].xyz;
+        let n = 4u * stencil_node(blocks, off);
+        let vi = vec3<f32>(grid[n], grid[n + 1u], grid[n + 2u]);
         let w = bspline_weight(s, off);
         let d = bspline_offset(s, off, step.dx);
         vp += w * vi;

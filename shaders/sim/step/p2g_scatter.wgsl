@@ -26,12 +26,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     let s = st.s;
     let base = vec3<u32>(s.base);
+    let blocks = stencil_blocks(base);
     let mv = xm.w * v_volume[p].xyz;
     let a = affine[p];
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
-        let i = base + off;
-        let node = node_index(i);
+        let node = stencil_node(blocks, off);
         if node == NO_SLOT {
             continue;
         }
