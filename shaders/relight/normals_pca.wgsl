@@ -1,4 +1,4 @@
-// GPU PCA normals, pass 2 (per recomputed Gaussian, after sorting by cell): the covariance
+// GPU PCA normals, pass 3 (per recomputed Gaussian, after sorting by cell): the covariance
 // of the same object's centres within the object's radius, its smallest-eigenvalue axis
 // (svd3 of the symmetric covariance), oriented along p − centroid when that offset is
 // clear and otherwise like the normal already there (the derive pass's transported one),
@@ -8,7 +8,8 @@
 
 @group(0) @binding(1) var<storage, read> gaussians: array<GaussianIn>;
 @group(0) @binding(2) var<storage, read> ranges: array<vec2<u32>>;
-@group(0) @binding(3) var<storage, read> sorted_values: array<u32>;
+// Centres and objects in cell order (normals_points.wgsl).
+@group(0) @binding(3) var<storage, read> points: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> object_of: array<u32>;
 @group(0) @binding(5) var<storage, read> objects: array<NormalObject>;
 @group(0) @binding(6) var<storage, read_write> shading: array<vec2<u32>>;
@@ -33,20 +34,21 @@ fn moments(p: vec3<f32>, obj: u32, radius: f32, axis: vec3<f32>, layer: f32) -> 
     let d = vec3<i32>(params.dims_count.xyz);
     let r2 = radius * radius;
     let keep_layer = any(axis != vec3<f32>(0.0));
-    for (var dz = -1; dz <= 1; dz++) {
-        for (var dy = -1; dy <= 1; dy++) {
-            for (var dx = -1; dx <= 1; dx++) {
+    let reach = i32(params.reach);
+    for (var dz = -reach; dz <= reach; dz++) {
+        for (var dy = -reach; dy <= reach; dy++) {
+            for (var dx = -reach; dx <= reach; dx++) {
                 let cc = c + vec3<i32>(dx, dy, dz);
-                if any(cc < vec3<i32>(0)) || any(cc >= d) {
+                if any(cc < vec3<i32>(0)) || any(cc >= d) || !cell_within(cc, p, radius) {
                     continue;
                 }
                 let range = ranges[normals_cell_index(cc)];
                 for (var k = range.x; k < range.y; k++) {
-                    let j = sorted_values[k];
-                    if object_of[j] != obj {
+                    let e = points[k];
+                    if e.w != obj {
                         continue;
                     }
-                    let q = gaussians[params.offset + j].mean_opacity.xyz - p;
+                    let q = bitcast<vec3<f32>>(e.xyz) - p;
                     if dot(q, q) > r2 || (keep_layer && dot(q, axis) <= -layer) {
                         continue;
                     }

@@ -1,8 +1,9 @@
 //! PCA normals on the GPU, in the deformed configuration (`lighting.simulated_normals =
 //! "recompute"`): the simulated Gaussians are hashed into a uniform grid
 //! (`shaders/relight/normals_keys.wgsl`), sorted by cell (the GPU primitive [`RadixSort`]),
-//! the cells' runs found ([`Ranges`]), and each Gaussian's normal refitted from the
-//! same object's centres within a radius (`normals_pca.wgsl`) — written straight into the
+//! the cells' runs found ([`Ranges`]), the centres copied into cell order
+//! (`normals_points.wgsl`), and each Gaussian's normal refitted from the same object's
+//! centres within a radius (`normals_pca.wgsl`) — written straight into the
 //! renderer's shading records, with no readback. The CPU twin is
 //! [`crate::relight::normals::pca_normals`] (k nearest instead of a radius).
 
@@ -27,7 +28,8 @@ pub struct NormalsParams {
     pub lo_h: [f32; 4],
     pub dims_count: [u32; 4],
     pub offset: u32,
-    pub _pad: [u32; 3],
+    pub reach: u32,
+    pub _pad: [u32; 2],
 }
 
 /// `NormalObject` of `shaders/relight/normals_common.wgsl`.
@@ -43,6 +45,11 @@ pub struct NormalObject {
 /// centres of a filled lattice on its surface (the CPU default k = 30) and the surface
 /// layer of its refit.
 pub const RADIUS_PER_SPACING: f32 = 2.6;
+
+/// Hash-grid cells per neighbourhood radius: cells of half a radius make the searched cells
+/// (those whose box comes within the radius) hug its sphere, about a third of the
+/// candidates of radius-wide cells.
+const CELLS_PER_RADIUS: f32 = 2.0;
 
 /// The most hash-grid cells (the cell ranges take 8 bytes each).
 const MAX_CELLS: f32 = 8.0e6;
@@ -70,6 +77,7 @@ pub struct RecomputedObject {
 /// The GPU normal pass over some objects of a renderer's Gaussians.
 pub struct GpuNormals {
     keys: Kernel,
+    points: Kernel,
     pca: Kernel,
     tile_ranges: Ranges,
     sort: RadixSort,
@@ -77,6 +85,7 @@ pub struct GpuNormals {
     plan: SortPlan,
     keys_bind: wgpu::BindGroup,
     ranges_bind: wgpu::BindGroup,
+    points_bind: wgpu::BindGroup,
     pca_bind: wgpu::BindGroup,
     cell_ranges: wgpu::Buffer,
     count: u32,
@@ -125,16 +134,19 @@ impl GpuNormals {
             });
         }
         let size = (hi - lo).max(Vec3::splat(1e-6));
-        let h = h
+        let radius = h;
+        let h = (radius / CELLS_PER_RADIUS)
             .max(1e-6)
             .max((size.x * size.y * size.z / MAX_CELLS).cbrt());
+        let reach = (radius / h).ceil().max(1.0) as u32;
         let dims = (size / h).ceil().as_uvec3().max(glam::UVec3::ONE);
         let cells = dims.x * dims.y * dims.z;
         let params = NormalsParams {
             lo_h: lo.extend(h).to_array(),
             dims_count: dims.extend(count).to_array(),
             offset: offset as u32,
-            _pad: [0; 3],
+            reach,
+            _pad: [0; 2],
         };
         let init = |label: &str, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -182,6 +194,12 @@ impl GpuNormals {
             &source(include_str!("../../shaders/relight/normals_keys.wgsl")),
             "main",
         );
+        let points_kernel = Kernel::new(
+            device,
+            "normals points",
+            &source(include_str!("../../shaders/relight/normals_points.wgsl")),
+            "main",
+        );
         let pca = Kernel::new(
             device,
             "normals pca",
@@ -193,13 +211,18 @@ impl GpuNormals {
         let ranges_bind = tile_ranges
             .kernel
             .bind(device, &[&key_count, sorted_keys, &cell_ranges]);
+        let points = storage(device, "normals points", n * 16);
+        let points_bind = points_kernel.bind(
+            device,
+            &[&params_buf, gaussians, sorted_values, &object_buf, &points],
+        );
         let pca_bind = pca.bind(
             device,
             &[
                 &params_buf,
                 gaussians,
                 &cell_ranges,
-                sorted_values,
+                &points,
                 &object_buf,
                 &table_buf,
                 shading,
@@ -207,6 +230,7 @@ impl GpuNormals {
         );
         Ok(GpuNormals {
             keys: keys_kernel,
+            points: points_kernel,
             pca,
             tile_ranges,
             sort,
@@ -214,11 +238,13 @@ impl GpuNormals {
             plan,
             keys_bind,
             ranges_bind,
+            points_bind,
             pca_bind,
             cell_ranges,
             count,
             _buffers: vec![
                 params_buf, object_buf, table_buf, keys, values, keys_alt, values_alt, key_count,
+                points,
             ],
         })
     }
@@ -238,6 +264,7 @@ impl GpuNormals {
             self.tile_ranges
                 .kernel
                 .dispatch(&mut c, &self.ranges_bind, groups);
+            self.points.dispatch(&mut c, &self.points_bind, groups);
             self.pca.dispatch(&mut c, &self.pca_bind, groups);
         }
         gpu.queue.submit([enc.finish()]);
@@ -283,7 +310,7 @@ mod tests {
             &src,
             NormalsParams,
             "NormalsParams",
-            [lo_h, dims_count, offset]
+            [lo_h, dims_count, offset, reach]
         );
         assert_layout!(&src, NormalObject, "NormalObject", [radius, layer]);
     }
