@@ -6,13 +6,13 @@
 // surface layer of a filled object). The twin of `relight::normals::pca_normals`, with a
 // radius instead of the k nearest.
 
-@group(0) @binding(1) var<storage, read> gaussians: array<GaussianIn>;
-@group(0) @binding(2) var<storage, read> ranges: array<vec2<u32>>;
-// Centres and objects in cell order (normals_points.wgsl).
+@group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
+// The recomputed Gaussians in cell order, and their centres and objects in that order
+// (normals_points.wgsl).
+@group(0) @binding(2) var<storage, read> sorted_values: array<u32>;
 @group(0) @binding(3) var<storage, read> points: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> object_of: array<u32>;
-@group(0) @binding(5) var<storage, read> objects: array<NormalObject>;
-@group(0) @binding(6) var<storage, read_write> shading: array<vec2<u32>>;
+@group(0) @binding(4) var<storage, read> objects: array<NormalObject>;
+@group(0) @binding(5) var<storage, read_write> shading: array<vec2<u32>>;
 
 struct Moments {
     n: f32,
@@ -84,13 +84,16 @@ fn pca_axis(m: Moments, radius: f32) -> vec3<f32> {
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
-    let i = flat_workgroup(wid, nwg) * 256u + lid;
-    if i >= params.dims_count.w {
+    // In cell order, so that the lanes of a SIMD vector search the same cells: their loops
+    // run alike instead of each waiting for the longest.
+    let k = flat_workgroup(wid, nwg) * 256u + lid;
+    if k >= params.dims_count.w {
         return;
     }
-    let g = params.offset + i;
-    let p = gaussians[g].mean_opacity.xyz;
-    let obj = object_of[i];
+    let g = params.offset + sorted_values[k];
+    let e = points[k];
+    let p = bitcast<vec3<f32>>(e.xyz);
+    let obj = e.w;
     let o = objects[obj];
     let first = moments(p, obj, o.radius, vec3<f32>(0.0), 0.0);
     if first.n < 4.0 {

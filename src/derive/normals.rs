@@ -220,10 +220,9 @@ impl GpuNormals {
             device,
             &[
                 &params_buf,
-                gaussians,
                 &cell_ranges,
+                sorted_values,
                 &points,
-                &object_buf,
                 &table_buf,
                 shading,
             ],
