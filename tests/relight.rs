@@ -386,6 +386,130 @@ fn a_blob_shadows_the_slab_where_the_geometry_says() {
     }
 }
 
+/// The shadow passes march only the voxels that some visible Gaussian's lookup reads
+/// (`shadow_mark.wgsl`): every such voxel, for each of two lights, holds the transmittance
+/// of the CPU reference march (`relight::shadow`, over the CPU-splatted volume), so no
+/// lookup reads a voxel that was left out; and the voxels marched are a fraction of the
+/// volume.
+#[test]
+fn every_voxel_a_shadow_lookup_reads_is_marched() {
+    use splatter::relight::oct_decode;
+    use splatter::relight::shadow::{splat, transmittance};
+    let (splats, shading) = lit_scene(&[
+        (
+            ProceduralSpec {
+                shape: Shape::Slab {
+                    size: [1.6, 1.6],
+                    thickness: 0.06,
+                },
+                ..spec(Shape::Sphere { radius: 1.0 }, 0.04)
+            },
+            Vec3::ZERO,
+        ),
+        (
+            spec(Shape::Sphere { radius: 0.2 }, 0.03),
+            Vec3::new(0.1, 0.0, 0.4),
+        ),
+    ]);
+    let cam = Camera::look_at(
+        Vec3::new(0.3, -2.5, 2.0),
+        Vec3::ZERO,
+        Vec3::Z,
+        45f32.to_radians(),
+        80,
+        60,
+    );
+    let grid = VolumeGrid::covering(Vec3::new(-0.9, -0.9, -0.1), Vec3::new(0.9, 0.9, 0.7), 40);
+    let lights = [
+        PointLight {
+            position: Vec3::new(0.8, 0.2, 1.4),
+            radiance: Vec3::splat(2.0),
+        },
+        PointLight {
+            position: Vec3::new(-0.7, -0.5, 1.0),
+            radiance: Vec3::splat(1.0),
+        },
+    ];
+    let depth = splat(&grid, &splats.means, &splats.covariances, &splats.opacities);
+    let voxels = grid.voxels();
+    // The voxels the shade pass reads: every Gaussian is in front of the camera and opaque
+    // enough to be drawn, so each one with a normal looks up each light (shadow_lookup).
+    let mut read = vec![false; voxels * lights.len()];
+    for (i, p) in splats.means.iter().enumerate() {
+        let n = oct_decode(shading[i][0]);
+        if n == Vec3::ZERO {
+            continue;
+        }
+        let n = if n.dot(cam.position - *p) < 0.0 {
+            -n
+        } else {
+            n
+        };
+        for (k, light) in lights.iter().enumerate() {
+            let l = (light.position - *p).normalize();
+            let x = (*p + l * (2.0 * grid.h) + n * (1.5 * grid.h) - grid.lo) / grid.h - 0.5;
+            let hi = grid.res.as_vec3() - 1.0;
+            if x.cmplt(Vec3::ZERO).any() || x.cmpgt(hi).any() {
+                continue;
+            }
+            let lo = x.floor().min(hi - 1.0).as_uvec3();
+            for c in 0..8u32 {
+                let v = lo + glam::UVec3::new(c & 1, (c >> 1) & 1, c >> 2);
+                read[k * voxels + (v.x + grid.res.x * (v.y + grid.res.y * v.z)) as usize] = true;
+            }
+        }
+    }
+    let wanted = read.iter().filter(|r| **r).count();
+    assert!(wanted > 100, "the scene's lookups read {wanted} voxels");
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.upload(&gpu, &splats).unwrap();
+        renderer
+            .set_lighting(
+                &gpu,
+                &LightingSetup {
+                    ambient: Vec3::splat(0.2),
+                    materials: vec![ShadingParams::default()],
+                    shading: shading.clone(),
+                    shadows: Some(grid),
+                    max_lights: lights.len(),
+                },
+            )
+            .unwrap();
+        renderer.set_lights(&lights);
+        renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        let t = renderer.read_transmittance(&gpu).unwrap().unwrap();
+        let mut worst = 0.0f32;
+        let mut shadowed = 0;
+        for (index, _) in read.iter().enumerate().filter(|(_, r)| **r) {
+            let (k, v) = (index / voxels, index % voxels);
+            let cell = glam::UVec3::new(
+                v as u32 % grid.res.x,
+                (v as u32 / grid.res.x) % grid.res.y,
+                v as u32 / (grid.res.x * grid.res.y),
+            );
+            let centre = grid.lo + (cell.as_vec3() + 0.5) * grid.h;
+            let want = transmittance(&grid, &depth, centre, lights[k].position);
+            worst = worst.max((t[index] - want).abs());
+            shadowed += usize::from(want < 0.5);
+        }
+        eprintln!(
+            "{}: {wanted} of {} voxel-lights read and marched ({shadowed} in shadow); worst |T − T_cpu| = {worst:.2e}",
+            gpu.info.name,
+            voxels * lights.len()
+        );
+        assert!(
+            worst < 1e-3,
+            "a looked-up voxel's transmittance is off by {worst}"
+        );
+        assert!(shadowed > 10, "the blob shadows some of the voxels read");
+        assert!(
+            wanted * 4 < voxels * lights.len(),
+            "a fraction of the volume is read"
+        );
+    }
+}
+
 /// Where the camera ray through pixel (x, y) meets the plane z = 0.
 fn ray_plane(cam: &Camera, x: u32, y: u32) -> Option<Vec3> {
     let (cx, cy) = cam.principal_point();

@@ -355,18 +355,20 @@ impl GpuRenderer {
         let Some(s) = &self.splats else {
             return Ok(Vec::new());
         };
-        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("gaussians readback"),
-            size: s.gaussians.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&s.gaussians, 0, &staging, 0, None);
-        gpu.queue.submit([enc.finish()]);
-        let bytes = read_buffer(gpu, &staging)?;
+        let bytes = crate::gpu::buffers::copy_out(gpu, &s.gaussians)?;
         let n = s.count as usize * std::mem::size_of::<GaussianIn>();
         Ok(bytemuck::pod_collect_to_vec(&bytes[..n]))
+    }
+
+    /// The shadow transmittance of the last frame, light-major (`shadow_transmit.wgsl`), or
+    /// None without shadows. Only the voxels some visible Gaussian looked up are current;
+    /// the others hold stale values. For tests of the shadow passes.
+    pub fn read_transmittance(&self, gpu: &GpuContext) -> Result<Option<Vec<f32>>, GpuError> {
+        let Some(l) = self.lighting.as_ref().filter(|l| l.grid.is_some()) else {
+            return Ok(None);
+        };
+        let bytes = crate::gpu::buffers::copy_out(gpu, &l.transmittance)?;
+        Ok(Some(bytemuck::pod_collect_to_vec(&bytes)))
     }
 
     /// Upload a set of Gaussians (replacing the previous one). Lighting set for a different
