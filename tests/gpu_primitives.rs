@@ -1,10 +1,10 @@
 //! The renderer's GPU building blocks against plain CPU versions: the prefix sum (with its
 //! saturation) and the stable radix sort.
 
+use splatter::gpu::buffers::copy_out;
 use splatter::gpu::scan::Scan;
 use splatter::gpu::sort::{RadixSort, SortBuffers};
 use splatter::gpu::{Executor, GpuContext};
-use splatter::render::gpu::read_buffer;
 use splatter::rng::SplitMix64;
 use wgpu::util::DeviceExt;
 
@@ -29,16 +29,7 @@ fn upload(gpu: &GpuContext, data: &[u32]) -> wgpu::Buffer {
 }
 
 fn download(gpu: &GpuContext, buffer: &wgpu::Buffer, n: usize) -> Vec<u32> {
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test readback"),
-        size: buffer.size(),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
-    gpu.queue.submit([enc.finish()]);
-    let bytes = read_buffer(gpu, &staging).unwrap();
+    let bytes = copy_out(gpu, buffer).unwrap();
     bytemuck::cast_slice::<u8, u32>(&bytes)[..n].to_vec()
 }
 

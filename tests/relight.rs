@@ -533,7 +533,6 @@ fn ray_plane(cam: &Camera, x: u32, y: u32) -> Option<Vec3> {
 fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
     use splatter::derive::Derive;
     use splatter::relight::oct_decode;
-    use splatter::render::gpu::read_buffer;
     use splatter::sim::gpu::GpuSim;
     use splatter::sim::nacc::{Case3Variant, NaccParams};
     use splatter::sim::{Boundaries, Grid, Material, Particles, StepParams, Transfer};
@@ -620,18 +619,7 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
             .iter()
             .map(|g| Vec3::new(g.mean_opacity[0], g.mean_opacity[1], g.mean_opacity[2]))
             .collect();
-        let buffer = renderer.shading_buffer().unwrap();
-        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: None,
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
-        gpu.queue.submit([enc.finish()]);
-        let transported: Vec<[u32; 2]> =
-            bytemuck::pod_collect_to_vec(&read_buffer(&gpu, &staging).unwrap());
+        let transported = read_shading(&gpu, &renderer);
         let recomputed = pca_normals(&means, 30);
         // The same on the GPU, in place of the transported normals.
         let gpu_normals = GpuNormals::new(
@@ -705,16 +693,7 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
 /// The renderer's shading records (packed normal, material), read back.
 fn read_shading(gpu: &splatter::gpu::GpuContext, renderer: &GpuRenderer) -> Vec<[u32; 2]> {
     let buffer = renderer.shading_buffer().unwrap();
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: buffer.size(),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
-    gpu.queue.submit([enc.finish()]);
-    bytemuck::pod_collect_to_vec(&splatter::render::gpu::read_buffer(gpu, &staging).unwrap())
+    bytemuck::pod_collect_to_vec(&splatter::gpu::buffers::copy_out(gpu, buffer).unwrap())
 }
 
 /// The GPU's PCA normals (a radius instead of the k nearest, same refit) against the

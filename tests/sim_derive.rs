@@ -4,11 +4,11 @@
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3};
 use splatter::derive::{derive_gaussian, derive_normal, rest_covariance, Binding, Derive};
+use splatter::gpu::buffers::copy_out;
 use splatter::gpu::GpuContext;
 use splatter::relight::{oct_decode, oct_encode, ShadingParams};
 use splatter::render::gpu::layout::GaussianIn;
 use splatter::render::gpu::lighting::LightingSetup;
-use splatter::render::gpu::read_buffer;
 use splatter::render::splats::{mat3_from_sym3, sym3_from_mat3};
 use splatter::render::{cpu, Camera, GpuRenderer, Splats};
 use splatter::rng::SplitMix64;
@@ -20,16 +20,7 @@ use splatter::splat::procedural::ProceduralSpec;
 
 fn read_gaussians(gpu: &GpuContext, renderer: &GpuRenderer, n: usize) -> Vec<GaussianIn> {
     let buffer = renderer.gaussian_buffer().unwrap();
-    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size: buffer.size(),
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = gpu.device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
-    gpu.queue.submit([enc.finish()]);
-    let bytes = read_buffer(gpu, &staging).unwrap();
+    let bytes = copy_out(gpu, buffer).unwrap();
     bytemuck::pod_collect_to_vec(&bytes[..n * std::mem::size_of::<GaussianIn>()])
 }
 
@@ -415,17 +406,7 @@ fn derive_transports_normals_with_the_inverse_transpose() {
             Some(shading.clone()),
         );
         let buffer = renderer.shading_buffer().unwrap();
-        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: None,
-            size: buffer.size(),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, None);
-        gpu.queue.submit([enc.finish()]);
-        let got: Vec<[u32; 2]> =
-            bytemuck::pod_collect_to_vec(&read_buffer(&gpu, &staging).unwrap());
+        let got: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&copy_out(&gpu, buffer).unwrap());
         let mut worst = 0.0f64;
         for p in 0..n {
             if p < offset {

@@ -644,16 +644,7 @@ impl GpuSim {
         let n = self.num_particles as usize;
         let b = &self.buffers;
         let read = |buf: &wgpu::Buffer, bytes: usize| -> Result<Vec<u8>, GpuError> {
-            let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("sim readback"),
-                size: buf.size(),
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let mut enc = gpu.device.create_command_encoder(&Default::default());
-            enc.copy_buffer_to_buffer(buf, 0, &staging, 0, None);
-            gpu.queue.submit([enc.finish()]);
-            let mut data = read_buffer(gpu, &staging)?;
+            let mut data = crate::gpu::buffers::copy_out(gpu, buf)?;
             data.truncate(bytes);
             Ok(data)
         };
