@@ -84,11 +84,25 @@ impl Kernel {
         device: &wgpu::Device,
         parts: &[(&str, wgpu::BufferBinding)],
     ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = parts
+        let resources: Vec<(&str, wgpu::BindingResource)> = parts
             .iter()
-            .map(|(name, part)| wgpu::BindGroupEntry {
+            .map(|(name, part)| (*name, wgpu::BindingResource::Buffer(part.clone())))
+            .collect();
+        self.bind_named_resources(device, &resources)
+    }
+
+    /// As [`bind_named`](Self::bind_named), with any resource per name (buffers and
+    /// texture views).
+    pub fn bind_named_resources(
+        &self,
+        device: &wgpu::Device,
+        resources: &[(&str, wgpu::BindingResource)],
+    ) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .iter()
+            .map(|(name, resource)| wgpu::BindGroupEntry {
                 binding: self.binding_of(name),
-                resource: wgpu::BindingResource::Buffer(part.clone()),
+                resource: resource.clone(),
             })
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {

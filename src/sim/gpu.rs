@@ -18,7 +18,7 @@ use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
 use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{Binds, Passes, StepBuffers, StepPass};
+use super::step::{Binds, GridTexture, Passes, StepBuffers, StepPass};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
@@ -78,9 +78,13 @@ impl P2gPath {
     }
 }
 
-/// Bytes of a grid pool of `blocks` blocks (64 nodes of 16 bytes each).
-fn pool_bytes(blocks: u32) -> u64 {
-    u64::from(blocks) * 64 * 16
+/// Bytes of the atomic path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
+/// each); the gather path sums in registers and needs none (one placeholder node).
+fn sums_bytes(path: P2gPath, blocks: u32) -> u64 {
+    match path {
+        P2gPath::Atomic => u64::from(blocks) * 64 * 16,
+        P2gPath::Gather => 16,
+    }
 }
 
 /// Blocks of 4³ nodes the particles' stencils reach now.
@@ -118,6 +122,9 @@ pub struct GpuSim {
     binds: Binds,
     num_particles: u32,
     num_blocks: u32,
+    /// The largest pool: every block of the domain, or as many as the grid texture's
+    /// largest size holds.
+    max_pool_blocks: u32,
     sort_bits: u32,
     /// The step constants as uploaded (moving colliders are added by `set_kinematic`).
     consts: GpuStep,
@@ -245,7 +252,9 @@ impl GpuSim {
         let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
         let base_cells = (grid.cells - 1).element_product();
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
-        let pool = initial_pool(particles, grid, blocks);
+        let max_pool_blocks =
+            blocks.min(GridTexture::max_blocks(gpu.limits.max_texture_dimension_2d));
+        let pool = initial_pool(particles, grid, max_pool_blocks);
         let mut step = step;
         step.pool_blocks = pool;
         let nn = u64::from(n);
@@ -268,7 +277,8 @@ impl GpuSim {
             key_count: init(gpu, "sim key count", &[n], false),
             affine: zeroed(gpu, "sim affine", nn * 48),
             ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
-            grid: zeroed(gpu, "sim grid pool", pool_bytes(pool)),
+            grid: zeroed(gpu, "sim grid pool", sums_bytes(path, pool)),
+            grid_velocity: GridTexture::new(device, pool),
             block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
             block_slot: zeroed(gpu, "sim block slots", u64::from(blocks) * 4),
             surface: match &params.boundaries.surface {
@@ -297,6 +307,7 @@ impl GpuSim {
             binds,
             num_particles: n,
             num_blocks: blocks,
+            max_pool_blocks,
             sort_bits,
             consts: step,
             kinematic: Vec::new(),
@@ -448,15 +459,18 @@ impl GpuSim {
 
     /// Bytes of the grid itself: the pool and the block → slot table.
     pub fn grid_bytes(&self) -> u64 {
-        self.buffers.grid.size() + self.buffers.block_slot.size()
+        self.buffers.grid.size()
+            + self.buffers.grid_velocity.bytes()
+            + self.buffers.block_slot.size()
     }
 
     /// Resize the grid pool to `blocks` blocks (at most every block of the domain). Results
     /// do not depend on the size as long as no step overflows it.
     pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
-        let blocks = blocks.clamp(1, self.num_blocks);
+        let blocks = blocks.clamp(1, self.max_pool_blocks);
         self.consts.pool_blocks = blocks;
-        self.buffers.grid = zeroed(gpu, "sim grid pool", pool_bytes(blocks));
+        self.buffers.grid = zeroed(gpu, "sim grid pool", sums_bytes(self.path, blocks));
+        self.buffers.grid_velocity = GridTexture::new(&gpu.device, blocks);
         self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
@@ -523,7 +537,7 @@ impl GpuSim {
     /// that came above 3/4 of the capacity (or overflowed it). Returns whether it grew.
     pub fn fit_pool(&mut self, gpu: &GpuContext, w: &Watchdog) -> Result<bool, GpuError> {
         let cap = self.consts.pool_blocks;
-        if cap >= self.num_blocks || u64::from(w.active_blocks_max) * 4 <= u64::from(cap) * 3 {
+        if cap >= self.max_pool_blocks || u64::from(w.active_blocks_max) * 4 <= u64::from(cap) * 3 {
             return Ok(false);
         }
         self.set_pool_blocks(gpu, w.active_blocks_max.saturating_mul(2))?;
@@ -579,7 +593,8 @@ impl GpuSim {
         ]
         .iter()
         .map(|buf| buf.size())
-        .sum()
+        .sum::<u64>()
+            + b.grid_velocity.bytes()
     }
 
     /// The watchdog (docs/method.md §2): particles that became non-finite, and particles that left the

@@ -101,10 +101,43 @@ struct SimStep {
 // `splatter bench sim --per-pass`).
 @group(0) @binding(0) var<storage, read> step: SimStep;
 
+// The step's scalar constants, copied out of `step` by read_consts() as the first statement
+// of every entry point, and read from here by the helpers. Why a copy: a CPU driver
+// (lavapipe) loads a buffer value once for all invocations only outside branches and loops;
+// inside one — and anywhere after an early return — it loads it once per invocation, in a
+// loop over the SIMD lanes. Read where used, Δx alone was a tenth of the scatter's time.
+struct StepConsts {
+    lo: vec3<f32>,
+    dx: f32,
+    inv_dx: f32,
+    dt: f32,
+    gravity: vec3<f32>,
+    cells: vec3<u32>,
+    nodes: vec3<u32>,
+    num_particles: u32,
+    pool_blocks: u32,
+    apic: u32,
+}
+
+var<private> consts: StepConsts;
+
+fn read_consts() {
+    consts.lo = step.lo;
+    consts.dx = step.dx;
+    consts.inv_dx = 1.0 / step.dx;
+    consts.dt = step.dt;
+    consts.gravity = step.gravity;
+    consts.cells = step.cells;
+    consts.nodes = step.nodes;
+    consts.num_particles = step.num_particles;
+    consts.pool_blocks = step.pool_blocks;
+    consts.apic = step.apic;
+}
+
 // Key of a particle whose stencil is off the grid: one past the last base cell, so those
 // particles sort last and fall into the extra slot of the cell ranges.
 fn no_cell_key() -> u32 {
-    let bc = step.cells - 1u;
+    let bc = consts.cells - 1u;
     return bc.x * bc.y * bc.z;
 }
 
@@ -120,13 +153,13 @@ fn grid_stencil(x: vec3<f32>) -> GridStencil {
     if !sim_is_finite3(x) {
         return out;
     }
-    let rel = (x - step.lo) / step.dx;
-    let top = vec3<f32>(step.cells) - 0.5;
+    let rel = (x - consts.lo) / consts.dx;
+    let top = vec3<f32>(consts.cells) - 0.5;
     if any(rel < vec3<f32>(0.5)) || any(rel >= top) {
         return out;
     }
-    out.s = bspline_stencil(x - step.lo, 1.0 / step.dx);
-    out.ok = all(out.s.base >= vec3<i32>(0)) && all(out.s.base + 2 <= vec3<i32>(step.cells));
+    out.s = bspline_stencil(x - consts.lo, consts.inv_dx);
+    out.ok = all(out.s.base >= vec3<i32>(0)) && all(out.s.base + 2 <= vec3<i32>(consts.cells));
     return out;
 }
 
@@ -152,7 +185,7 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
 const BLOCK: u32 = 4u;
 
 fn blocks_per_axis() -> vec3<u32> {
-    return (step.nodes + BLOCK - 1u) / BLOCK;
+    return (consts.nodes + BLOCK - 1u) / BLOCK;
 }
 
 fn block_index(b: vec3<u32>) -> u32 {
@@ -182,13 +215,13 @@ fn block_node(block: u32, lid: u32) -> BlockNode {
     let b = vec3<u32>(block % nb.x, (block / nb.x) % nb.y, block / (nb.x * nb.y));
     let node = b * BLOCK + vec3<u32>(lid % BLOCK, (lid / BLOCK) % BLOCK, lid / (BLOCK * BLOCK));
     var out: BlockNode;
-    out.ok = all(node < step.nodes);
+    out.ok = all(node < consts.nodes);
     out.node = node;
     out.index = node_index(node);
     return out;
 }
 
-// Sparse grid. The grid's nodes live in a pool of `step.pool_blocks` blocks of 4³ nodes
+// Sparse grid. The grid's nodes live in a pool of `consts.pool_blocks` blocks of 4³ nodes
 // (one vec4 each); `block_slot` maps every block of the domain to its pool slot for the
 // current step (NO_SLOT: not active). compact_blocks.wgsl assigns the slots each step, so
 // grid memory follows the active region, not the domain. Node i's storage is always found
@@ -208,6 +241,18 @@ fn node_index(i: vec3<u32>) -> u32 {
     }
     let l = i % BLOCK;
     return slot * BLOCK_NODES + l.x + BLOCK * (l.y + BLOCK * l.z);
+}
+
+// The grid's velocities after the grid update are also written to a 2D rgba32float texture
+// (xyz velocity, w mass), node node_index n at texel grid_texel(n), and G2P reads its 27
+// nodes from there. Why a texture: a CPU driver (lavapipe) fetches texels for all SIMD lanes
+// in one unrolled gather, but loads a storage-buffer element at a per-invocation index one
+// lane at a time, in a loop through memory; on a GPU a texel fetch costs no more than a
+// buffer load. A row holds a power of two of nodes, 64 whole blocks.
+const GRID_TEXELS_PER_ROW: u32 = 4096u;
+
+fn grid_texel(n: u32) -> vec2<u32> {
+    return vec2<u32>(n % GRID_TEXELS_PER_ROW, n / GRID_TEXELS_PER_ROW);
 }
 
 // The pool slots of the blocks holding the 3×3×3 nodes of a stencil from `base` (at most
@@ -256,5 +301,5 @@ fn stencil_node(s: StencilBlocks, off: vec3<u32>) -> u32 {
 
 // The number of listed active blocks: those that got a pool slot.
 fn listed_blocks(count: u32) -> u32 {
-    return min(count, step.pool_blocks);
+    return min(count, consts.pool_blocks);
 }

@@ -20,6 +20,7 @@ const MAX_GROUPS_X: u32 = 65535u;
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let b = flat_id(wid, nwg, lid);
     if b == 0u {
         atomicAdd(&flags[3], 1u);
@@ -35,7 +36,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     block_flags[b] = 0u;
     let slot = atomicAdd(&block_args[3], 1u);
     atomicMax(&flags[4], slot + 1u);
-    if slot >= step.pool_blocks {
+    if slot >= consts.pool_blocks {
         block_slot[b] = NO_SLOT;
         atomicAdd(&flags[5], 1u);
         return;

@@ -8,10 +8,8 @@
 @group(0) @binding(4) var<storage, read_write> affine_velocity: array<mat3x3<f32>>;
 @group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
 @group(0) @binding(6) var<storage, read> material: array<u32>;
-// The grid pool's nodes (common.wgsl, node_index) as 4 floats each: velocity x, y, z and
-// mass; read as scalars, as G2P needs only the velocity (a CPU driver gathers each
-// component a lane reads, so the unused mass would cost a fourth more).
-@group(0) @binding(7) var<storage, read> grid: array<f32>;
+// The grid's nodes after the grid update: velocity xyz, mass w (common.wgsl, grid_texel).
+@group(0) @binding(7) var grid_velocity: texture_2d<f32>;
 // The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
 // F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
@@ -27,6 +25,7 @@ fn count_failure(slot: u32) {
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let p = flat_id(wid, nwg, lid);
     if p >= page.count {
         return;
@@ -40,9 +39,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         } else {
             count_failure(0u);
         }
-        let v = vv.xyz + step.gravity * step.dt;
+        let v = vv.xyz + consts.gravity * consts.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
-        x_mass[p] = vec4<f32>(xm.xyz + v * step.dt, xm.w);
+        x_mass[p] = vec4<f32>(xm.xyz + v * consts.dt, xm.w);
         return;
     }
     let s = st.s;
@@ -52,18 +51,17 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
-        let n = 4u * stencil_node(blocks, off);
-        let vi = vec3<f32>(grid[n], grid[n + 1u], grid[n + 2u]);
+        let vi = textureLoad(grid_velocity, grid_texel(stencil_node(blocks, off)), 0).xyz;
         let w = bspline_weight(s, off);
-        let d = bspline_offset(s, off, step.dx);
+        let d = bspline_offset(s, off, consts.dx);
         vp += w * vi;
         b += mat3x3<f32>(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
     }
-    let c = b * (4.0 / (step.dx * step.dx));
-    let f_trial = (SIM_IDENTITY3 + c * step.dt) * deformation[p];
+    let c = b * (4.0 / (consts.dx * consts.dx));
+    let f_trial = (SIM_IDENTITY3 + c * consts.dt) * deformation[p];
     v_volume[p] = vec4<f32>(vp, vv.w);
     affine_velocity[p] = c;
-    x_mass[p] = vec4<f32>(xm.xyz + vp * step.dt, xm.w);
+    x_mass[p] = vec4<f32>(xm.xyz + vp * consts.dt, xm.w);
     let m = step.materials[material[p]];
     let plastic = material_plasticity(m, f_trial, alpha[p]);
     let f_new = plastic.f;

@@ -100,8 +100,8 @@ fn apply_kinematic(k: u32, x: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
 
 // φ at node i + d, clamped to the grid (mirrors `SurfaceCollider::phi_at`).
 fn surface_phi(i: vec3<u32>, d: vec3<i32>) -> f32 {
-    let c = vec3<u32>(clamp(vec3<i32>(i) + d, vec3<i32>(0), vec3<i32>(step.nodes) - 1));
-    return surface[c.x + step.nodes.x * (c.y + step.nodes.y * c.z)];
+    let c = vec3<u32>(clamp(vec3<i32>(i) + d, vec3<i32>(0), vec3<i32>(consts.nodes) - 1));
+    return surface[c.x + consts.nodes.x * (c.y + consts.nodes.y * c.z)];
 }
 
 // The surface collider on node i (mirrors `SurfaceCollider::apply`): inside (φ ≤ 0) the
@@ -127,8 +127,8 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
         return vec3<f32>(0.0);
     }
-    let x = step.lo + vec3<f32>(i) * step.dx;
-    var v = momentum / mass + step.gravity * step.dt;
+    let x = consts.lo + vec3<f32>(i) * consts.dx;
+    var v = momentum / mass + consts.gravity * consts.dt;
     for (var k = 0u; k < step.num_colliders; k++) {
         let c = step.colliders[k];
         if dot(x - c.point.xyz, c.normal.xyz) <= 0.0 {
@@ -147,7 +147,7 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
         if i[axis] < step.band {
             v = apply_condition(step.walls[2u * axis], v, e);
         }
-        if i[axis] + step.band > step.cells[axis] {
+        if i[axis] + step.band > consts.cells[axis] {
             v = apply_condition(step.walls[2u * axis + 1u], v, -e);
         }
     }

@@ -7,15 +7,16 @@
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let i = flat_id(wid, nwg, lid);
-    if i >= step.num_particles {
+    if i >= consts.num_particles {
         return;
     }
     let key = cell_keys[i];
     if key == no_cell_key() || (i > 0u && cell_keys[i - 1u] == key) {
         return;
     }
-    let bc = step.cells - 1u;
+    let bc = consts.cells - 1u;
     let base = vec3<u32>(key % bc.x, (key / bc.x) % bc.y, key / (bc.x * bc.y));
     let lo = stencil_block_lo(base);
     let hi = stencil_block_hi(base);

@@ -8,6 +8,7 @@
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let p = flat_id(wid, nwg, lid);
     if p >= page.count {
         return;

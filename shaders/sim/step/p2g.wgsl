@@ -10,8 +10,8 @@
 @group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
-// xyz: velocity after the grid update, w: mass
-@group(0) @binding(6) var<storage, read_write> grid: array<vec4<f32>>;
+// xyz: velocity after the grid update, w: mass (common.wgsl, grid_texel)
+@group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
 // The blocks some particle's stencil reaches (compact_blocks.wgsl); nodes elsewhere are left
 // as they are: no particle reads them.
 @group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
@@ -21,6 +21,7 @@
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let slot = wid.x + wid.y * nwg.x;
     if slot >= listed_blocks(block_args[3]) {
         return;
@@ -31,7 +32,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     let idx = bn.index;
     let node = vec3<i32>(bn.node);
-    let bc = vec3<i32>(step.cells) - 1;
+    let bc = vec3<i32>(consts.cells) - 1;
     var msum = 0.0;
     var psum = vec3<f32>(0.0);
     for (var oz = 0; oz < 3; oz++) {
@@ -47,14 +48,14 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
                 for (var k = range.x; k < range.y; k++) {
                     let p = cell_values[k];
                     let xm = x_mass[p];
-                    let s = bspline_stencil(xm.xyz - step.lo, 1.0 / step.dx);
+                    let s = bspline_stencil(xm.xyz - consts.lo, consts.inv_dx);
                     let w = bspline_weight(s, off);
-                    let d = bspline_offset(s, off, step.dx);
+                    let d = bspline_offset(s, off, consts.dx);
                     msum += w * xm.w;
                     psum += w * (xm.w * v_volume[p].xyz + affine[p] * d);
                 }
             }
         }
     }
-    grid[idx] = vec4<f32>(node_velocity(vec3<u32>(node), psum, msum), msum);
+    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(node_velocity(vec3<u32>(node), psum, msum), msum));
 }

@@ -15,6 +15,7 @@
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let p = flat_id(wid, nwg, lid);
     if p >= page.count {
         return;
@@ -37,7 +38,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         }
         let idx = 4u * node;
         let w = bspline_weight(s, off);
-        let mom = w * (mv + a * bspline_offset(s, off, step.dx));
+        let mom = w * (mv + a * bspline_offset(s, off, consts.dx));
         atomicAdd(&grid_sum[idx], mom.x);
         atomicAdd(&grid_sum[idx + 1u], mom.y);
         atomicAdd(&grid_sum[idx + 2u], mom.z);

@@ -14,6 +14,7 @@
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
+    read_consts();
     let p = flat_id(wid, nwg, lid);
     if p >= page.count {
         return;
@@ -25,14 +26,14 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         cell_keys[p] = no_cell_key();
         return;
     }
-    let bc = step.cells - 1u;
+    let bc = consts.cells - 1u;
     let b = vec3<u32>(st.s.base);
     cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
     let mass = xm.w;
-    let inv_d = 4.0 / (step.dx * step.dx);
+    let inv_d = 4.0 / (consts.dx * consts.dx);
     let tau = material_kirchhoff(step.materials[material[p]], deformation[p]);
-    var a = tau * (-step.dt * v_volume[p].w * inv_d);
-    if step.apic == 1u {
+    var a = tau * (-consts.dt * v_volume[p].w * inv_d);
+    if consts.apic == 1u {
         a += affine_velocity[p] * mass;
     }
     affine[p] = a;

@@ -19,20 +19,24 @@ impl G2p {
 
     /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
-        self.kernel.bind_named_parts(
+        use wgpu::BindingResource::{Buffer, TextureView};
+        self.kernel.bind_named_resources(
             device,
             &[
-                ("step", b.step.as_entire_buffer_binding()),
-                ("page", b.pages.entry(i)),
-                ("x_mass", b.window(&b.x_mass, i, VEC4)),
-                ("v_volume", b.window(&b.v_volume, i, VEC4)),
-                ("deformation", b.window(&b.deformation, i, MAT3)),
-                ("affine_velocity", b.window(&b.affine_velocity, i, MAT3)),
-                ("alpha", b.window(&b.alpha, i, SCALAR)),
-                ("material", b.window(&b.material, i, SCALAR)),
-                ("grid", b.grid.as_entire_buffer_binding()),
-                ("flags", b.flags.as_entire_buffer_binding()),
-                ("block_slot", b.block_slot.as_entire_buffer_binding()),
+                ("step", b.step.as_entire_binding()),
+                ("page", Buffer(b.pages.entry(i))),
+                ("x_mass", Buffer(b.window(&b.x_mass, i, VEC4))),
+                ("v_volume", Buffer(b.window(&b.v_volume, i, VEC4))),
+                ("deformation", Buffer(b.window(&b.deformation, i, MAT3))),
+                (
+                    "affine_velocity",
+                    Buffer(b.window(&b.affine_velocity, i, MAT3)),
+                ),
+                ("alpha", Buffer(b.window(&b.alpha, i, SCALAR))),
+                ("material", Buffer(b.window(&b.material, i, SCALAR))),
+                ("grid_velocity", TextureView(&b.grid_velocity.view)),
+                ("flags", b.flags.as_entire_binding()),
+                ("block_slot", b.block_slot.as_entire_binding()),
             ],
         )
     }

@@ -18,15 +18,19 @@ impl GridFromSums {
     }
 
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+        self.kernel.bind_named_resources(
             device,
             &[
-                ("step", &b.step),
-                ("grid", &b.grid),
-                ("active_blocks", &b.active_blocks),
-                ("block_args", &b.block_args),
-                ("block_slot", &b.block_slot),
-                ("surface", &b.surface),
+                ("step", b.step.as_entire_binding()),
+                ("grid", b.grid.as_entire_binding()),
+                (
+                    "grid_velocity",
+                    wgpu::BindingResource::TextureView(&b.grid_velocity.view),
+                ),
+                ("active_blocks", b.active_blocks.as_entire_binding()),
+                ("block_args", b.block_args.as_entire_binding()),
+                ("block_slot", b.block_slot.as_entire_binding()),
+                ("surface", b.surface.as_entire_binding()),
             ],
         )
     }

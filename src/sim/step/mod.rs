@@ -81,8 +81,11 @@ pub(crate) struct StepBuffers {
     pub key_count: wgpu::Buffer,
     pub affine: wgpu::Buffer,
     pub ranges: wgpu::Buffer,
-    /// The sparse grid's pool: `pool_blocks` × 64 nodes × vec4 (common.wgsl, node_index).
+    /// The sparse grid's pool: `pool_blocks` × 64 nodes × vec4 (common.wgsl, node_index);
+    /// the atomic path's sums (a placeholder on the gather path, which needs none).
     pub grid: wgpu::Buffer,
+    /// The grid's velocities after the grid update, for G2P (common.wgsl, grid_texel).
+    pub grid_velocity: GridTexture,
     pub block_flags: wgpu::Buffer,
     /// Block → pool slot, one u32 per block of the domain.
     pub block_slot: wgpu::Buffer,
@@ -93,6 +96,50 @@ pub(crate) struct StepBuffers {
     pub flags: wgpu::Buffer,
     /// How the particle arrays split into pages, one entry per page for its dispatches.
     pub pages: PageRanges,
+}
+
+/// Nodes per row of the grid texture (`GRID_TEXELS_PER_ROW` in common.wgsl): 64 blocks.
+pub(crate) const GRID_TEXELS_PER_ROW: u32 = 4096;
+
+/// The grid's velocities as an rgba32float texture, node `n` at texel
+/// (n mod [`GRID_TEXELS_PER_ROW`], n / [`GRID_TEXELS_PER_ROW`]); written by the grid
+/// update, read by G2P.
+pub(crate) struct GridTexture {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+}
+
+impl GridTexture {
+    /// The most pool blocks a texture of at most `max_dimension` rows holds.
+    pub fn max_blocks(max_dimension: u32) -> u32 {
+        max_dimension.saturating_mul(GRID_TEXELS_PER_ROW / 64)
+    }
+
+    /// A texture for a pool of `blocks` blocks (at most [`Self::max_blocks`]).
+    pub fn new(device: &wgpu::Device, blocks: u32) -> GridTexture {
+        let rows = (u64::from(blocks) * 64).div_ceil(u64::from(GRID_TEXELS_PER_ROW));
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("sim grid velocity"),
+            size: wgpu::Extent3d {
+                width: GRID_TEXELS_PER_ROW,
+                height: rows.max(1) as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        GridTexture { texture, view }
+    }
+
+    pub fn bytes(&self) -> u64 {
+        let s = self.texture.size();
+        u64::from(s.width) * u64::from(s.height) * 16
+    }
 }
 
 /// Bytes per particle of the particle arrays, by record type (their page windows).

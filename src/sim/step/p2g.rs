@@ -19,20 +19,23 @@ impl P2gGather {
     }
 
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
-        self.kernel.bind_named(
+        self.kernel.bind_named_resources(
             device,
             &[
-                ("step", &b.step),
-                ("ranges", &b.ranges),
-                ("cell_values", sorted.values),
-                ("x_mass", &b.x_mass),
-                ("v_volume", &b.v_volume),
-                ("affine", &b.affine),
-                ("grid", &b.grid),
-                ("active_blocks", &b.active_blocks),
-                ("block_args", &b.block_args),
-                ("block_slot", &b.block_slot),
-                ("surface", &b.surface),
+                ("step", b.step.as_entire_binding()),
+                ("ranges", b.ranges.as_entire_binding()),
+                ("cell_values", sorted.values.as_entire_binding()),
+                ("x_mass", b.x_mass.as_entire_binding()),
+                ("v_volume", b.v_volume.as_entire_binding()),
+                ("affine", b.affine.as_entire_binding()),
+                (
+                    "grid_velocity",
+                    wgpu::BindingResource::TextureView(&b.grid_velocity.view),
+                ),
+                ("active_blocks", b.active_blocks.as_entire_binding()),
+                ("block_args", b.block_args.as_entire_binding()),
+                ("block_slot", b.block_slot.as_entire_binding()),
+                ("surface", b.surface.as_entire_binding()),
             ],
         )
     }
