@@ -134,6 +134,17 @@ fn read_consts() {
     consts.apic = step.apic;
 }
 
+// The affine momentum term of P2G, m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (docs/method.md §2
+// step 1), from the particle's material, F, C, mass and initial volume.
+fn affine_term(m: SimMaterial, f: mat3x3<f32>, c: mat3x3<f32>, mass: f32, volume: f32) -> mat3x3<f32> {
+    let inv_d = 4.0 / (consts.dx * consts.dx);
+    var a = material_kirchhoff(m, f) * (-consts.dt * volume * inv_d);
+    if consts.apic == 1u {
+        a += c * mass;
+    }
+    return a;
+}
+
 // Key of a particle whose stencil is off the grid: one past the last base cell, so those
 // particles sort last and fall into the extra slot of the cell ranges.
 fn no_cell_key() -> u32 {

@@ -15,6 +15,10 @@
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
 // [3] steps since the last read (compact_blocks.wgsl). Read and cleared once per frame.
 @group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 4>;
+// The next step's affine term (common.wgsl, affine_term), written when NEXT_AFFINE (a
+// constant G2p prepends: the atomic path, whose steps then skip the prepare pass; the
+// gather path's prepare runs every step for the sort keys and computes it there).
+@group(0) @binding(9) var<storage, read_write> affine: array<mat3x3<f32>>;
 
 fn count_failure(slot: u32) {
     atomicAdd(&flags[slot], 1u);
@@ -42,6 +46,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         let v = vv.xyz + consts.gravity * consts.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
         x_mass[p] = vec4<f32>(xm.xyz + v * consts.dt, xm.w);
+        if NEXT_AFFINE {
+            affine[p] = affine_term(step.materials[material[p]], deformation[p], affine_velocity[p],
+                                    xm.w, vv.w);
+        }
         return;
     }
     let s = st.s;
@@ -67,6 +75,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let f_new = plastic.f;
     alpha[p] = plastic.alpha;
     deformation[p] = f_new;
+    if NEXT_AFFINE {
+        affine[p] = affine_term(m, f_new, c, xm.w, vv.w);
+    }
     if !(sim_is_finite3(vp) && sim_is_finite_mat3(f_new)) {
         count_failure(0u);
     }

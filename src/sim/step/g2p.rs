@@ -1,5 +1,6 @@
 //! `shaders/sim/step/g2p.wgsl`: per particle: velocity, C, F and position from the grid,
-//! then the material's plasticity (G2P).
+//! then the material's plasticity (G2P); on the atomic path also the next step's affine
+//! term.
 
 use crate::gpu::Kernel;
 
@@ -10,10 +11,15 @@ pub(crate) struct G2p {
 }
 
 impl G2p {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let src = include_str!("../../../shaders/sim/step/g2p.wgsl");
+    /// With `next_affine`, G2P also writes the next step's affine term (the atomic path,
+    /// whose later steps then skip [`super::Prepare`]).
+    pub fn new(device: &wgpu::Device, next_affine: bool) -> Self {
+        let src = format!(
+            "const NEXT_AFFINE: bool = {next_affine};\n{}",
+            include_str!("../../../shaders/sim/step/g2p.wgsl")
+        );
         G2p {
-            kernel: step_kernel(device, "sim g2p", src),
+            kernel: step_kernel(device, "sim g2p", &src),
         }
     }
 
@@ -37,6 +43,7 @@ impl G2p {
                 ("grid_velocity", TextureView(&b.grid_velocity.view)),
                 ("flags", b.flags.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
+                ("affine", Buffer(b.window(&b.affine, i, MAT3))),
             ],
         )
     }

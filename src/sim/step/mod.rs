@@ -17,7 +17,9 @@
 //! Where the adapter has float atomics, steps 2–5 are instead [`MarkParticles`] (each
 //! particle flags the blocks of its stencil), [`CompactBlocks`], [`P2gScatter`] (each
 //! particle adds to its 27 nodes) and [`GridFromSums`] (the grid update on the active
-//! blocks). [`Passes::list`] is that algorithm; [`Passes::stages`] records it through the
+//! blocks), and only the first step of a submission runs [`Prepare`]: that path's G2P
+//! leaves the next step's affine term, so later steps need not re-read F, C and the
+//! material for it. [`Passes::list`] is that algorithm; [`Passes::stages`] records it through the
 //! same named stages the renderer uses (`gpu::stages`).
 
 mod compact_blocks;
@@ -256,7 +258,7 @@ impl Passes {
             mark_blocks: MarkBlocks::new(device),
             compact_blocks: CompactBlocks::new(device),
             gather: P2gGather::new(device),
-            g2p: G2p::new(device),
+            g2p: G2p::new(device, atomic),
             atomic: atomic.then(|| AtomicPasses {
                 mark: MarkParticles::new(device),
                 scatter: P2gScatter::new(device),
@@ -329,15 +331,18 @@ impl Passes {
         }
     }
 
-    /// The passes of one step, in order.
-    pub fn list(&self, particles: u32) -> Vec<StepPass> {
+    /// The passes of one step, in order; `first`: the first step of a submission. The
+    /// atomic path runs [`Prepare`] only then: its G2P leaves the next step's affine term.
+    pub fn list(&self, particles: u32, first: bool) -> Vec<StepPass> {
         use StepPass::*;
         let mut list = vec![Clear];
         if particles == 0 {
             // Nothing reaches the grid, and there is nothing to move.
             return list;
         }
-        list.push(Prepare);
+        if first || self.atomic.is_none() {
+            list.push(Prepare);
+        }
         match &self.atomic {
             Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
             None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
