@@ -286,14 +286,34 @@ fn block_slot_at(b: vec3<u32>) -> u32 {
 fn stencil_blocks(base: vec3<u32>) -> StencilBlocks {
     let lo = stencil_block_lo(base);
     let hi = stencil_block_hi(base);
+    // Only the blocks the stencil crosses into are read (3.4 of 8 on average): stencil_node
+    // never picks the others, and a CPU driver pays for each invocation's load.
+    let cross = hi != lo;
     var s: StencilBlocks;
     s.base = base;
-    s.near = vec4<u32>(block_slot_at(lo), block_slot_at(vec3<u32>(hi.x, lo.y, lo.z)),
-                       block_slot_at(vec3<u32>(lo.x, hi.y, lo.z)),
-                       block_slot_at(vec3<u32>(hi.x, hi.y, lo.z)));
-    s.far = vec4<u32>(block_slot_at(vec3<u32>(lo.x, lo.y, hi.z)),
-                      block_slot_at(vec3<u32>(hi.x, lo.y, hi.z)),
-                      block_slot_at(vec3<u32>(lo.x, hi.y, hi.z)), block_slot_at(hi));
+    s.near = vec4<u32>(block_slot_at(lo), NO_SLOT, NO_SLOT, NO_SLOT);
+    s.far = vec4<u32>(NO_SLOT);
+    if cross.x {
+        s.near.y = block_slot_at(vec3<u32>(hi.x, lo.y, lo.z));
+    }
+    if cross.y {
+        s.near.z = block_slot_at(vec3<u32>(lo.x, hi.y, lo.z));
+        if cross.x {
+            s.near.w = block_slot_at(vec3<u32>(hi.x, hi.y, lo.z));
+        }
+    }
+    if cross.z {
+        s.far.x = block_slot_at(vec3<u32>(lo.x, lo.y, hi.z));
+        if cross.x {
+            s.far.y = block_slot_at(vec3<u32>(hi.x, lo.y, hi.z));
+        }
+        if cross.y {
+            s.far.z = block_slot_at(vec3<u32>(lo.x, hi.y, hi.z));
+            if cross.x {
+                s.far.w = block_slot_at(hi);
+            }
+        }
+    }
     return s;
 }
 
