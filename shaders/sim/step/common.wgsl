@@ -117,6 +117,8 @@ struct StepConsts {
     num_particles: u32,
     pool_blocks: u32,
     apic: u32,
+    // step.materials[0], read for all invocations at once; particle_material
+    material0: SimMaterial,
 }
 
 var<private> consts: StepConsts;
@@ -132,6 +134,17 @@ fn read_consts() {
     consts.num_particles = step.num_particles;
     consts.pool_blocks = step.pool_blocks;
     consts.apic = step.apic;
+    consts.material0 = step.materials[0];
+}
+
+// The parameters of material i. Material 0's come from the copy read at the top of the
+// pass; other materials are read for the invocations that have them (a scene of one
+// material pays nothing per particle for its parameters).
+fn particle_material(i: u32) -> SimMaterial {
+    if i == 0u {
+        return consts.material0;
+    }
+    return step.materials[i];
 }
 
 // The affine momentum term of P2G, m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (docs/method.md §2

@@ -47,7 +47,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         v_volume[p] = vec4<f32>(v, vv.w);
         x_mass[p] = vec4<f32>(xm.xyz + v * consts.dt, xm.w);
         if NEXT_AFFINE {
-            affine[p] = affine_term(step.materials[material[p]], deformation[p], affine_velocity[p],
+            affine[p] = affine_term(particle_material(material[p]), deformation[p], affine_velocity[p],
                                     xm.w, vv.w);
         }
         return;
@@ -70,7 +70,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     v_volume[p] = vec4<f32>(vp, vv.w);
     affine_velocity[p] = c;
     x_mass[p] = vec4<f32>(xm.xyz + vp * consts.dt, xm.w);
-    let m = step.materials[material[p]];
+    let m = particle_material(material[p]);
     let plastic = material_plasticity(m, f_trial, alpha[p]);
     let f_new = plastic.f;
     alpha[p] = plastic.alpha;

@@ -31,6 +31,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let bc = consts.cells - 1u;
     let b = vec3<u32>(st.s.base);
     cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
-    affine[p] = affine_term(step.materials[material[p]], deformation[p], affine_velocity[p], xm.w,
+    affine[p] = affine_term(particle_material(material[p]), deformation[p], affine_velocity[p], xm.w,
                             v_volume[p].w);
 }
