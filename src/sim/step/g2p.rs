@@ -25,7 +25,7 @@ impl G2p {
 
     /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
-        use wgpu::BindingResource::{Buffer, TextureView};
+        use wgpu::BindingResource::Buffer;
         self.kernel.bind_named_resources(
             device,
             &[
@@ -40,7 +40,7 @@ impl G2p {
                 ),
                 ("alpha", Buffer(b.window(&b.alpha, i, SCALAR))),
                 ("material", Buffer(b.window(&b.material, i, SCALAR))),
-                ("grid_velocity", TextureView(&b.grid_velocity.view)),
+                ("grid_velocity", b.grid_velocity.binding()),
                 ("flags", b.flags.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
                 ("affine", Buffer(b.window(&b.affine, i, MAT3))),

@@ -138,6 +138,11 @@ impl GridTexture {
         GridTexture { texture, view }
     }
 
+    /// The texture as a bind-group resource.
+    pub fn binding(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::TextureView(&self.view)
+    }
+
     pub fn bytes(&self) -> u64 {
         let s = self.texture.size();
         u64::from(s.width) * u64::from(s.height) * 16

@@ -28,10 +28,7 @@ impl P2gGather {
                 ("x_mass", b.x_mass.as_entire_binding()),
                 ("v_volume", b.v_volume.as_entire_binding()),
                 ("affine", b.affine.as_entire_binding()),
-                (
-                    "grid_velocity",
-                    wgpu::BindingResource::TextureView(&b.grid_velocity.view),
-                ),
+                ("grid_velocity", b.grid_velocity.binding()),
                 ("active_blocks", b.active_blocks.as_entire_binding()),
                 ("block_args", b.block_args.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
