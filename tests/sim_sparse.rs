@@ -143,3 +143,23 @@ fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
     assert!(reruns > 0, "test setup: the small pool must overflow");
     assert!(got.x == want.x && got.v == want.v && got.f == want.f);
 }
+
+/// A pool that cannot grow (capped as the grid texture of an adapter with a small largest
+/// texture would cap it) and overflows: `step_frame` stops with an error that names the
+/// blocks needed and the limit, instead of re-running the frame for ever.
+#[test]
+fn an_overflow_past_the_adapters_pool_limit_is_an_error() {
+    use splatter::sim::frame::FrameError;
+    let (p, grid, materials, params) = fruit();
+    let gpu = GpuContext::new(None).unwrap();
+    let mut sim = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
+    sim.limit_pool_blocks(&gpu, 8).unwrap();
+    assert!(sim.pool_at_limit() && sim.pool_can_overflow());
+    match sim.step_frame(&gpu, 2, 0.0) {
+        Err(e @ FrameError::PoolAtLimit { needed, limit }) => {
+            assert!(needed > 8 && limit == 8, "{e}");
+            assert!(e.to_string().contains("coarser grid"), "{e}");
+        }
+        other => panic!("expected PoolAtLimit, got {other:?}"),
+    }
+}

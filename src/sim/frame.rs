@@ -10,6 +10,8 @@ pub enum FrameError {
     Gpu(#[from] GpuError),
     #[error("{overflow} block(s) overflowed a sparse-grid pool that holds every block of the domain (an internal error; please report it)")]
     PoolHoldsDomain { overflow: u32 },
+    #[error("the simulation's moving region reached {needed} blocks of 4³ grid nodes, more than the {limit} this adapter's grid texture holds (64 blocks per row of its largest 2D texture): use a coarser grid (a larger simulation.dx)")]
+    PoolAtLimit { needed: u32, limit: u32 },
 }
 
 /// What running a frame's substeps took.
@@ -49,6 +51,12 @@ impl GpuSim {
             if !retry {
                 return Err(FrameError::PoolHoldsDomain {
                     overflow: watchdog.pool_overflow,
+                });
+            }
+            if self.pool_at_limit() {
+                return Err(FrameError::PoolAtLimit {
+                    needed: watchdog.active_blocks_max,
+                    limit: self.pool_blocks(),
                 });
             }
             log::info!(

@@ -489,6 +489,20 @@ impl GpuSim {
         gpu.check()
     }
 
+    /// Whether the pool is as large as it can be on this adapter (every block of the
+    /// domain, or what the grid texture holds): an overflow then cannot be grown out of.
+    pub fn pool_at_limit(&self) -> bool {
+        self.consts.pool_blocks >= self.max_pool_blocks
+    }
+
+    /// Cap the pool at `blocks` (below what the adapter allows), as an adapter with a
+    /// smaller largest texture would: for tests of that limit.
+    pub fn limit_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
+        self.max_pool_blocks = self.max_pool_blocks.min(blocks.max(1));
+        let pool = self.consts.pool_blocks.min(self.max_pool_blocks);
+        self.set_pool_blocks(gpu, pool)
+    }
+
     /// Whether a step can overflow the grid pool (it holds fewer blocks than the domain).
     pub fn pool_can_overflow(&self) -> bool {
         self.consts.pool_blocks < self.num_blocks
