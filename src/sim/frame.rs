@@ -38,7 +38,9 @@ impl GpuSim {
     ) -> Result<FrameSteps, FrameError> {
         let mut reruns = 0;
         loop {
-            let retry = self.pool_can_overflow();
+            // A pool at the adapter's limit cannot grow: its overflow is an error, so there
+            // is no state to save for a re-run.
+            let retry = self.pool_can_overflow() && !self.pool_at_limit();
             if retry {
                 self.save_state(gpu)?;
             }
@@ -49,14 +51,15 @@ impl GpuSim {
                 return Ok(FrameSteps { watchdog, reruns });
             }
             if !retry {
-                return Err(FrameError::PoolHoldsDomain {
-                    overflow: watchdog.pool_overflow,
-                });
-            }
-            if self.pool_at_limit() {
-                return Err(FrameError::PoolAtLimit {
-                    needed: watchdog.active_blocks_max,
-                    limit: self.pool_blocks(),
+                return Err(if self.pool_can_overflow() {
+                    FrameError::PoolAtLimit {
+                        needed: watchdog.active_blocks_max,
+                        limit: self.pool_blocks(),
+                    }
+                } else {
+                    FrameError::PoolHoldsDomain {
+                        overflow: watchdog.pool_overflow,
+                    }
                 });
             }
             log::info!(

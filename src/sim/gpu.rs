@@ -18,7 +18,7 @@ use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
 use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{Binds, GridTexture, Passes, StepBuffers, StepPass};
+use super::step::{Binds, GridTexture, Passes, StepBuffers, StepPass, GRID_TEXELS_PER_ROW};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
@@ -227,6 +227,13 @@ impl GpuSim {
                 gpu.describe()
             ))));
         }
+        let texture_limit = gpu.limits.max_texture_dimension_2d;
+        if texture_limit < GRID_TEXELS_PER_ROW {
+            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
+                "the simulation's grid texture is {GRID_TEXELS_PER_ROW} texels wide, and {} allows 2D textures of at most {texture_limit}",
+                gpu.describe()
+            ))));
+        }
         let n = particles.len() as u32;
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
@@ -252,8 +259,7 @@ impl GpuSim {
         let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
         let base_cells = (grid.cells - 1).element_product();
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
-        let max_pool_blocks =
-            blocks.min(GridTexture::max_blocks(gpu.limits.max_texture_dimension_2d));
+        let max_pool_blocks = blocks.min(GridTexture::max_blocks(texture_limit));
         let pool = initial_pool(particles, grid, max_pool_blocks);
         let mut step = step;
         step.pool_blocks = pool;
@@ -463,7 +469,8 @@ impl GpuSim {
         self.consts.pool_blocks
     }
 
-    /// Bytes of the grid itself: the pool and the block → slot table.
+    /// Bytes of the grid itself: the pool (the atomic path's sums), the grid texture and
+    /// the block → slot table.
     pub fn grid_bytes(&self) -> u64 {
         self.buffers.grid.size()
             + self.buffers.grid_velocity.bytes()
@@ -497,6 +504,7 @@ impl GpuSim {
 
     /// Cap the pool at `blocks` (below what the adapter allows), as an adapter with a
     /// smaller largest texture would: for tests of that limit.
+    #[doc(hidden)]
     pub fn limit_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
         self.max_pool_blocks = self.max_pool_blocks.min(blocks.max(1));
         let pool = self.consts.pool_blocks.min(self.max_pool_blocks);

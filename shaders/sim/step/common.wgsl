@@ -267,9 +267,9 @@ fn node_index(i: vec3<u32>) -> u32 {
     return slot * BLOCK_NODES + l.x + BLOCK * (l.y + BLOCK * l.z);
 }
 
-// The grid's velocities after the grid update are also written to a 2D rgba32float texture
-// (xyz velocity, w mass), node node_index n at texel grid_texel(n), and G2P reads its 27
-// nodes from there. Why a texture: a CPU driver (lavapipe) fetches texels for all SIMD lanes
+// The grid's velocities after the grid update go to a 2D rgba32float texture (xyz
+// velocity, w mass), node node_index n at texel grid_texel(n), and G2P reads its 27 nodes
+// from there. Why a texture: a CPU driver (lavapipe) fetches texels for all SIMD lanes
 // in one unrolled gather, but loads a storage-buffer element at a per-invocation index one
 // lane at a time, in a loop through memory; on a GPU a texel fetch costs no more than a
 // buffer load. A row holds a power of two of nodes, 64 whole blocks.

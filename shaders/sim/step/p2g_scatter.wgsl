@@ -8,7 +8,8 @@
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> affine: array<mat3x3<f32>>;
 // The grid pool (common.wgsl, node_index), 4 floats per node: momentum x, y, z, mass;
-// cleared before every step and turned into velocities in place by grid_from_sums.wgsl.
+// cleared before every step; grid_from_sums.wgsl turns the sums into velocities in the
+// grid texture (common.wgsl, grid_texel).
 // The blocks were flagged and given slots before (mark_particles.wgsl, compact_blocks.wgsl).
 @group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<f32>>;
 
