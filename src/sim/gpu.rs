@@ -477,7 +477,8 @@ impl GpuSim {
             + self.buffers.block_slot.size()
     }
 
-    /// Resize the grid pool to `blocks` blocks (at most every block of the domain). Results
+    /// Resize the grid pool to `blocks` blocks (at most every block of the domain, and at
+    /// most what the grid texture holds: [`Self::pool_at_limit`]). Results
     /// do not depend on the size as long as no step overflows it.
     pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
         let blocks = blocks.clamp(1, self.max_pool_blocks);
