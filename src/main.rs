@@ -13,7 +13,7 @@ use splatter::scene;
 
 mod cli;
 
-use cli::{AccuracyPart, BenchWhat, Cli, Command, SuiteArgs};
+use cli::{AccuracyPart, BenchWhat, Cli, Command, ShatterMapping, SuiteArgs};
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(
@@ -112,6 +112,8 @@ fn run(cli: Cli) -> Result<()> {
                     redraw,
                     scenes,
                     shatter_dx,
+                    shatter_mapping,
+                    shatter_quarter,
                 },
         }) => {
             use splatter::study::{AccuracyOptions, Part};
@@ -126,6 +128,17 @@ fn run(cli: Cli) -> Result<()> {
             {
                 bail!("--shatter-dx {bad}: expected positive grid spacings in metres");
             }
+            // In the study's order, each once.
+            let shatter_mappings: Option<Vec<&'static str>> = shatter_mapping.map(|chosen| {
+                [
+                    (ShatterMapping::Continuous, "continuous"),
+                    (ShatterMapping::Center, "center"),
+                ]
+                .into_iter()
+                .filter(|(m, _)| chosen.contains(m))
+                .map(|(_, name)| name)
+                .collect()
+            });
             let part = match only {
                 AccuracyPart::All => Part::All,
                 AccuracyPart::Convergence => Part::Convergence,
@@ -143,6 +156,8 @@ fn run(cli: Cli) -> Result<()> {
                 gpu: gpu.as_ref(),
                 scenes: &scenes,
                 shatter_dx: shatter_dx.as_deref(),
+                shatter_mappings: shatter_mappings.as_deref(),
+                shatter_quarter,
             };
             splatter::study::run_accuracy(&opts, &out, &mut std::io::stderr())
         }

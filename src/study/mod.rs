@@ -46,6 +46,10 @@ pub struct AccuracyOptions<'a> {
     pub scenes: &'a Path,
     /// The shatter study's grid spacings, if not its defaults.
     pub shatter_dx: Option<&'a [f64]>,
+    /// The shatter study's return mappings, if not both.
+    pub shatter_mappings: Option<&'a [&'static str]>,
+    /// The shatter study simulates one quarter of the fruit (`shatter::cut_to_quarter`).
+    pub shatter_quarter: bool,
 }
 
 /// Runs the study parts and writes OUT/data/{convergence,atlas,shatter}.{json,md},
@@ -118,21 +122,58 @@ pub fn run_accuracy(opts: &AccuracyOptions, out: &Path, log: &mut dyn Write) -> 
         } else {
             &shatter::DX_FULL
         });
-        let report = shatter::run_shatter(gpu, (opts.scenes, &images), dxs, quick, &mut |r| {
-            let _ = writeln!(
-                log,
-                "shatter dx {} {}: {} pieces, largest {:.1}%, damaged {:.1}%, speed ratio {:.2}, energy ratio {:.3}, non-finite {}, {:.0} s",
-                r.dx,
-                r.mapping,
-                r.pieces,
-                100.0 * r.largest_share,
-                100.0 * r.damaged_share,
-                r.speed_ratio,
-                r.energy_ratio,
-                r.nonfinite,
-                r.wall_s
-            );
+        let plan = shatter::ShatterPlan {
+            dxs,
+            mappings: opts.shatter_mappings.unwrap_or(&shatter::MAPPINGS),
+            quick,
+            quarter: opts.shatter_quarter,
+        };
+        let fruit = if plan.quarter { " quarter" } else { "" };
+        let report = shatter::run_shatter(gpu, (opts.scenes, &images), &plan, &mut |event| {
+            let _ = match event {
+                shatter::ShatterEvent::Frame {
+                    dx,
+                    mapping,
+                    frame,
+                    frames,
+                } => writeln!(
+                    log,
+                    "shatter dx {dx} {mapping}{fruit}: frame {}/{frames} ({:.0} s)",
+                    frame + 1,
+                    started.elapsed().as_secs_f64()
+                ),
+                shatter::ShatterEvent::Done(r) => writeln!(
+                    log,
+                    "shatter dx {} {}{fruit}: {} pieces, largest {:.1}%, damaged {:.1}%, speed ratio {:.2}, energy ratio {:.3}, non-finite {}, {:.0} s",
+                    r.dx,
+                    r.mapping,
+                    r.pieces,
+                    100.0 * r.largest_share,
+                    100.0 * r.damaged_share,
+                    r.speed_ratio,
+                    r.energy_ratio,
+                    r.nonfinite,
+                    r.wall_s
+                ),
+            };
         })?;
+        // Runs made earlier into the same file stay unless this invocation repeated them.
+        let earlier = std::fs::read_to_string(data.join("shatter.json"))
+            .ok()
+            .and_then(|text| serde_json::from_str::<shatter::ShatterReport>(&text).ok());
+        let report = match earlier {
+            Some(earlier) => {
+                let merged = shatter::merge(earlier, report);
+                writeln!(
+                    log,
+                    "shatter: {} runs in {} (with the earlier ones it did not repeat)",
+                    merged.runs.len(),
+                    data.join("shatter.json").display()
+                )?;
+                merged
+            }
+            None => report,
+        };
         let report: shatter::ShatterReport = round_trip(&report, &data.join("shatter.json"))?;
         std::fs::write(data.join("shatter.md"), tables::shatter_markdown(&report))?;
         tables::shatter_chart(&report, &images.join("shatter.png"))?;

@@ -5,14 +5,19 @@
 //! gravitational energy against its start, non-finite particles). It answers whether the
 //! pattern converges, from which Δx pieces appear, and what the continuous mapping changes
 //! against the center mapping (docs/accuracy.md).
+//!
+//! Fine spacings cost a CPU hours, so the study can also run one quarter of the fruit
+//! between two symmetry planes ([`cut_to_quarter`]), and each invocation's runs are merged
+//! into the ones already in `shatter.json` ([`merge`]): a long study can be run in parts.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
 
-use crate::run::{one_line, Input, Run, RunOptions};
+use crate::run::{one_line, Event, Input, Run, RunOptions};
 
 /// Grid spacings of the full study (metres), coarse to fine, and of `--quick`.
 pub const DX_FULL: [f64; 3] = [0.03, 0.02, 0.015];
@@ -26,6 +31,10 @@ pub const MAPPINGS: [&str; 2] = ["continuous", "center"];
 pub struct ShatterRun {
     pub dx: f64,
     pub mapping: String,
+    /// One quarter of the fruit between two symmetry planes ([`cut_to_quarter`]): the
+    /// counts and shares are the quarter's.
+    #[serde(default)]
+    pub quarter: bool,
     pub particles: usize,
     pub frames: u32,
     /// Last frame: fragments with ≥ 1% of the particles, the largest one's share, the
@@ -52,40 +61,151 @@ pub struct ShatterReport {
     pub runs: Vec<ShatterRun>,
 }
 
+/// What one invocation of the study runs.
+pub struct ShatterPlan<'a> {
+    /// Grid spacings, coarse to fine.
+    pub dxs: &'a [f64],
+    /// Return mappings, a subset of [`MAPPINGS`].
+    pub mappings: &'a [&'static str],
+    /// 6 frames instead of 24.
+    pub quick: bool,
+    /// One quarter of the fruit ([`cut_to_quarter`]).
+    pub quarter: bool,
+}
+
+/// What the study reports while it runs.
+pub enum ShatterEvent<'a> {
+    /// Frame `frame` of `frames` of the run at `dx` with `mapping` is done.
+    Frame {
+        dx: f64,
+        mapping: &'a str,
+        frame: u32,
+        frames: u32,
+    },
+    /// A run is finished and measured.
+    Done(&'a ShatterRun),
+}
+
 /// Runs the study on `scenes/watermelon_drop.json` under `scenes`.
-/// Each run's last frame is kept as `stills/shatter_{mapping}_{dx}.png`, and the two
-/// mappings at the finest Δx side by side as `stills/shatter_mappings.png`.
+/// Each whole-fruit run's last frame is kept as `stills/shatter_{mapping}_{dx}.png`, and
+/// with both mappings, the two at the finest Δx side by side as
+/// `stills/shatter_mappings.png`. Quarter runs keep no still: the rest of the fruit stays
+/// in the picture, unsimulated, and would hide the quarter.
 pub fn run_shatter(
     gpu: &crate::gpu::GpuContext,
     (scenes, stills): (&Path, &Path),
-    dxs: &[f64],
-    quick: bool,
-    on_run: &mut dyn FnMut(&ShatterRun),
+    plan: &ShatterPlan,
+    on_event: &mut dyn FnMut(ShatterEvent),
 ) -> Result<ShatterReport> {
     let scene = scenes.join("watermelon_drop.json");
     let text = std::fs::read_to_string(&scene)
         .with_context(|| format!("cannot read {}", scene.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text)?;
-    if dxs.is_empty() {
-        bail!("the shatter study needs at least one grid spacing");
+    let mut value: Value = serde_json::from_str(&text)?;
+    if plan.dxs.is_empty() || plan.mappings.is_empty() {
+        bail!("the shatter study needs at least one grid spacing and one return mapping");
     }
-    let frames = if quick { 6 } else { 24 };
+    if plan.quarter {
+        cut_to_quarter(&mut value).with_context(|| format!("{}", scene.display()))?;
+    }
+    let frames = if plan.quick { 6 } else { 24 };
     let mut runs = Vec::new();
-    for &dx in dxs {
-        for mapping in MAPPINGS {
-            let still = stills.join(format!("shatter_{mapping}_{dx}.png"));
-            let run = run_one(gpu, (&scene, &value), dx, mapping, frames, &still)?;
-            on_run(&run);
+    for &dx in plan.dxs {
+        for &mapping in plan.mappings {
+            let still = (!plan.quarter).then(|| stills.join(format!("shatter_{mapping}_{dx}.png")));
+            let mut run = run_one(
+                gpu,
+                (&scene, &value),
+                (dx, mapping),
+                frames,
+                still.as_deref(),
+                on_event,
+            )?;
+            run.quarter = plan.quarter;
+            on_event(ShatterEvent::Done(&run));
             runs.push(run);
         }
     }
-    let finest = dxs[dxs.len() - 1];
-    let pair = MAPPINGS.map(|m| stills.join(format!("shatter_{m}_{finest}.png")));
-    side_by_side(&pair, &stills.join("shatter_mappings.png"))?;
+    if !plan.quarter && plan.mappings.len() == MAPPINGS.len() {
+        let finest = plan.dxs[plan.dxs.len() - 1];
+        let pair = MAPPINGS.map(|m| stills.join(format!("shatter_{m}_{finest}.png")));
+        side_by_side(&pair, &stills.join("shatter_mappings.png"))?;
+    }
     Ok(ShatterReport {
         scene: "scenes/watermelon_drop.json".into(),
         runs,
     })
+}
+
+/// Keeps only one quarter of the fruit in the simulation: the part with x and y at or
+/// above its centre's (its `physics.select`), between two slip planes through its centre
+/// with normals +x and +y (the table's frictionless `slip` colliders: the velocity across
+/// a plane is removed both ways). The fruit is an ellipsoid with its axes along x, y and z
+/// and it falls straight down, so these planes are planes of symmetry of the whole drop and
+/// the quarter moves as its part of the whole fruit would, at a quarter of the particles.
+/// Two things differ: the seeds' layout is only nearly symmetric, and no crack can open
+/// along a plane (the quarter's piece count is of cracks elsewhere). The rest of the fruit
+/// stays in the scene, static and unsimulated.
+pub fn cut_to_quarter(v: &mut Value) -> Result<()> {
+    let three = |x: &Value, what: &str| -> Result<[f64; 3]> {
+        let a: Option<Vec<f64>> = x
+            .as_array()
+            .map(|a| a.iter().filter_map(Value::as_f64).collect());
+        match a {
+            Some(a) if a.len() == 3 => Ok([a[0], a[1], a[2]]),
+            _ => bail!("{what}: expected three numbers"),
+        }
+    };
+    let domain_lo = three(&v["simulation"]["domain"]["lo"], "simulation.domain.lo")?;
+    let domain_hi = three(&v["simulation"]["domain"]["hi"], "simulation.domain.hi")?;
+    let fruit = v["objects"]
+        .as_array_mut()
+        .and_then(|objects| objects.iter_mut().find(|o| o["name"] == "watermelon"))
+        .context("no object named watermelon")?;
+    let c = three(
+        &fruit["transform"]["translate"],
+        "watermelon's transform.translate",
+    )?;
+    fruit["physics"]["select"] = json!({
+        "box": { "lo": [c[0], c[1], domain_lo[2]], "hi": domain_hi }
+    });
+    let planes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+        .map(|normal| json!({ "point": c, "normal": normal, "kind": "slip", "friction": 0.0 }));
+    match v["simulation"]["colliders"].as_array_mut() {
+        Some(colliders) => colliders.extend(planes),
+        None => v["simulation"]["colliders"] = Value::Array(planes.to_vec()),
+    }
+    Ok(())
+}
+
+/// The runs of `earlier` that `new` does not repeat (same Δx, mapping and fruit), with
+/// `new`'s runs: the whole fruit first, then by Δx coarse to fine, `continuous` before
+/// `center`.
+pub fn merge(earlier: ShatterReport, new: ShatterReport) -> ShatterReport {
+    let same = |a: &ShatterRun, b: &ShatterRun| {
+        a.dx == b.dx && a.mapping == b.mapping && a.quarter == b.quarter
+    };
+    let mut runs: Vec<ShatterRun> = earlier
+        .runs
+        .into_iter()
+        .filter(|old| !new.runs.iter().any(|n| same(old, n)))
+        .collect();
+    runs.extend(new.runs);
+    let order = |m: &str| {
+        MAPPINGS
+            .iter()
+            .position(|x| *x == m)
+            .unwrap_or(MAPPINGS.len())
+    };
+    runs.sort_by(|a, b| {
+        a.quarter
+            .cmp(&b.quarter)
+            .then(b.dx.total_cmp(&a.dx))
+            .then(order(&a.mapping).cmp(&order(&b.mapping)))
+    });
+    ShatterReport {
+        scene: new.scene,
+        runs,
+    }
 }
 
 /// Two images of one size next to each other.
@@ -101,11 +221,11 @@ fn side_by_side(pair: &[PathBuf; 2], out: &Path) -> Result<()> {
 
 fn run_one(
     gpu: &crate::gpu::GpuContext,
-    (scene, value): (&Path, &serde_json::Value),
-    dx: f64,
-    mapping: &str,
+    (scene, value): (&Path, &Value),
+    (dx, mapping): (f64, &str),
     frames: u32,
-    still: &Path,
+    still: Option<&Path>,
+    on_event: &mut dyn FnMut(ShatterEvent),
 ) -> Result<ShatterRun> {
     let tmp = std::env::temp_dir().join(format!("splatter-shatter-{}", std::process::id()));
     std::fs::create_dir_all(&tmp)?;
@@ -130,26 +250,39 @@ fn run_one(
     };
     let start = Instant::now();
     Run::prepare(opts)
-        .and_then(|run| run.execute(gpu, &mut |_| {}))
+        .and_then(|run| {
+            run.execute(gpu, &mut |event| {
+                if let Event::FrameDone { frame, .. } = event {
+                    on_event(ShatterEvent::Frame {
+                        dx,
+                        mapping,
+                        frame,
+                        frames,
+                    });
+                }
+            })
+        })
         .map_err(|e| anyhow::anyhow!("watermelon_drop at dx {dx} ({mapping}): {}", one_line(&e)))?;
     let wall_s = start.elapsed().as_secs_f64();
     let rows = read_rows(&out.join("fragments.csv"))?;
-    let last = out.join(format!("frame_{:05}.png", frames - 1));
-    std::fs::copy(&last, still).with_context(|| format!("cannot keep {}", last.display()))?;
+    if let Some(still) = still {
+        let last = out.join(format!("frame_{:05}.png", frames - 1));
+        std::fs::copy(&last, still).with_context(|| format!("cannot keep {}", last.display()))?;
+    }
     let _ = std::fs::remove_dir_all(&tmp);
     summarise(&rows, dx, mapping, frames, wall_s)
 }
 
 /// Every NACC material of the scene gets `mapping`.
-fn set_mapping(v: &mut serde_json::Value, mapping: &str) {
+fn set_mapping(v: &mut Value, mapping: &str) {
     match v {
-        serde_json::Value::Object(map) => {
+        Value::Object(map) => {
             if map.get("model").and_then(|m| m.as_str()) == Some("nacc") {
                 map.insert("return_mapping".into(), mapping.into());
             }
             map.values_mut().for_each(|x| set_mapping(x, mapping));
         }
-        serde_json::Value::Array(items) => items.iter_mut().for_each(|x| set_mapping(x, mapping)),
+        Value::Array(items) => items.iter_mut().for_each(|x| set_mapping(x, mapping)),
         _ => {}
     }
 }
@@ -232,6 +365,7 @@ fn summarise(rows: &[Row], dx: f64, mapping: &str, frames: u32, wall_s: f64) -> 
     Ok(ShatterRun {
         dx,
         mapping: mapping.into(),
+        quarter: false,
         particles: first.particles,
         frames,
         pieces: last.pieces,
@@ -272,7 +406,7 @@ mod tests {
 
     #[test]
     fn the_mapping_is_set_on_every_nacc_material_only() {
-        let mut v: serde_json::Value = serde_json::json!({
+        let mut v: Value = json!({
             "objects": [{ "physics": {
                 "material": { "model": "nacc", "return_mapping": "continuous" },
                 "regions": [{ "material": { "model": "nacc" } },
@@ -284,5 +418,96 @@ mod tests {
         assert_eq!(m["material"]["return_mapping"], "center");
         assert_eq!(m["regions"][0]["material"]["return_mapping"], "center");
         assert!(m["regions"][1]["material"].get("return_mapping").is_none());
+    }
+
+    /// The quarter is selected and walled at the fruit's centre, by slip planes facing
+    /// into it, and the table's collider stays.
+    #[test]
+    fn a_quarter_is_the_fruit_above_its_centre_between_two_slip_planes() {
+        let mut v = json!({
+            "simulation": {
+                "domain": { "lo": [0, 0, -0.1], "hi": [0.6, 0.6, 0.45] },
+                "colliders": [{ "point": [0.3, 0.3, 0.06], "normal": [0, 0, 1], "kind": "separate" }]
+            },
+            "objects": [
+                { "name": "table" },
+                { "name": "watermelon", "transform": { "translate": [0.3, 0.25, 0.166] },
+                  "physics": { "fill": true } }
+            ]
+        });
+        cut_to_quarter(&mut v).unwrap();
+        let fruit = &v["objects"][1]["physics"];
+        assert_eq!(fruit["select"]["box"]["lo"], json!([0.3, 0.25, -0.1]));
+        assert_eq!(fruit["select"]["box"]["hi"], json!([0.6, 0.6, 0.45]));
+        assert_eq!(fruit["fill"], true);
+        let colliders = v["simulation"]["colliders"].as_array().unwrap();
+        assert_eq!(colliders.len(), 3);
+        for (c, normal) in colliders[1..]
+            .iter()
+            .zip([json!([1.0, 0.0, 0.0]), json!([0.0, 1.0, 0.0])])
+        {
+            assert_eq!(c["point"], json!([0.3, 0.25, 0.166]));
+            assert_eq!(c["normal"], normal);
+            assert_eq!(
+                (c["kind"].as_str(), c["friction"].as_f64()),
+                (Some("slip"), Some(0.0))
+            );
+        }
+        let mut no_fruit = json!({ "simulation": { "domain": { "lo": [0, 0, 0], "hi": [1, 1, 1] } },
+                                   "objects": [{ "name": "table" }] });
+        let e = cut_to_quarter(&mut no_fruit).unwrap_err().to_string();
+        assert!(e.contains("watermelon"), "{e}");
+    }
+
+    /// A new run replaces the earlier one of the same Δx, mapping and fruit; the others
+    /// stay, whole fruit first, coarse to fine, continuous before center.
+    #[test]
+    fn new_runs_replace_their_earlier_twins_and_keep_the_rest() {
+        let run = |dx: f64, mapping: &str, quarter: bool, wall_s: f64| ShatterRun {
+            dx,
+            mapping: mapping.into(),
+            quarter,
+            particles: 1,
+            frames: 24,
+            pieces: 1,
+            largest_share: 1.0,
+            damaged_share: 0.1,
+            fragments: 1,
+            speed_ratio: 0.3,
+            energy_ratio: 0.1,
+            nonfinite: 0,
+            wall_s,
+        };
+        let report = |runs| ShatterReport {
+            scene: "s".into(),
+            runs,
+        };
+        let earlier = report(vec![
+            run(0.02, "continuous", false, 1.0),
+            run(0.02, "center", false, 1.0),
+            run(0.01, "continuous", false, 1.0),
+            run(0.01, "continuous", true, 1.0),
+        ]);
+        let new = report(vec![
+            run(0.005, "continuous", true, 2.0),
+            run(0.01, "continuous", true, 2.0),
+            run(0.02, "center", false, 2.0),
+        ]);
+        let merged = merge(earlier, new);
+        let got: Vec<(f64, &str, bool, f64)> = merged
+            .runs
+            .iter()
+            .map(|r| (r.dx, r.mapping.as_str(), r.quarter, r.wall_s))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (0.02, "continuous", false, 1.0),
+                (0.02, "center", false, 2.0),
+                (0.01, "continuous", false, 1.0),
+                (0.01, "continuous", true, 2.0),
+                (0.005, "continuous", true, 2.0),
+            ]
+        );
     }
 }

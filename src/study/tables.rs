@@ -274,16 +274,18 @@ pub fn atlas_chart(r: &AtlasReport, path: &Path) -> Result<()> {
 /// One row per run of the shatter study, finest Δx last.
 pub fn shatter_markdown(r: &ShatterReport) -> String {
     let mut s = format!(
-        "`{}`, last frame of each run (`--fragments`: pieces hold ≥ 1% of the particles).\n\n\
-         | Δx (m) | mapping | particles | pieces | largest | damaged | fragments | max speed / drop speed | max energy / start | non-finite | wall s |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|\n",
+        "`{}`, last frame of each run (`--fragments`: pieces hold ≥ 1% of the particles; \
+         fruit `quarter`: one quarter between two symmetry planes, its own counts and shares).\n\n\
+         | Δx (m) | mapping | fruit | particles | pieces | largest | damaged | fragments | max speed / drop speed | max energy / start | non-finite | wall s |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|\n",
         r.scene
     );
     for x in &r.runs {
         s += &format!(
-            "| {} | {} | {} | {} | {:.1}% | {:.1}% | {} | {:.2} | {:.3} | {} | {:.0} |\n",
+            "| {} | {} | {} | {} | {} | {:.1}% | {:.1}% | {} | {:.2} | {:.3} | {} | {:.0} |\n",
             x.dx,
             x.mapping,
+            if x.quarter { "quarter" } else { "whole" },
             x.particles,
             x.pieces,
             100.0 * x.largest_share,
@@ -301,24 +303,37 @@ pub fn shatter_markdown(r: &ShatterReport) -> String {
 /// What the shatter chart plots of a run.
 type Measure = fn(&ShatterRun) -> f64;
 
-/// Pieces, largest share and damaged share against Δx, one colour per mapping.
+/// Pieces, largest share and damaged share against Δx, one colour per mapping and measure:
+/// the whole fruit's runs joined by lines, a quarter's as markers of the same colour.
 pub fn shatter_chart(r: &ShatterReport, path: &Path) -> Result<()> {
+    let measures: [(&str, Measure); 3] = [
+        ("pieces", |x| x.pieces as f64),
+        ("largest share", |x| x.largest_share),
+        ("damaged share", |x| x.damaged_share),
+    ];
     let mut series = Vec::new();
-    for (m, mapping) in super::shatter::MAPPINGS.iter().enumerate() {
-        let runs: Vec<&ShatterRun> = r.runs.iter().filter(|x| x.mapping == *mapping).collect();
-        let measures: [(&str, Measure); 3] = [
-            ("pieces", |x| x.pieces as f64),
-            ("largest share", |x| x.largest_share),
-            ("damaged share", |x| x.damaged_share),
-        ];
-        for (k, (name, f)) in measures.iter().enumerate() {
-            series.push(Series {
-                label: format!("{name} ({mapping})"),
-                points: runs.iter().map(|x| (x.dx, f(x))).collect(),
-                line: true,
-                markers: true,
-                color: 3 * m + k,
-            });
+    for quarter in [false, true] {
+        for (m, mapping) in super::shatter::MAPPINGS.iter().enumerate() {
+            let runs: Vec<&ShatterRun> = r
+                .runs
+                .iter()
+                .filter(|x| x.mapping == *mapping && x.quarter == quarter)
+                .collect();
+            if runs.is_empty() {
+                continue;
+            }
+            for (k, (name, f)) in measures.iter().enumerate() {
+                series.push(Series {
+                    label: format!(
+                        "{name} ({mapping}{})",
+                        if quarter { ", quarter" } else { "" }
+                    ),
+                    points: runs.iter().map(|x| (x.dx, f(x))).collect(),
+                    line: !quarter,
+                    markers: true,
+                    color: 3 * m + k,
+                });
+            }
         }
     }
     lines(
