@@ -1,14 +1,17 @@
 //! Real captures as users bring them: the up axis and support `inspect` estimates, the
-//! upright, framed quick look of `render --ply`, `up` in scene files, and the fill of an
-//! open capture. Data: tests/data/captures (a subset of the shared plant capture) and
+//! upright, framed quick look of `render --ply`, the capture seen from its own training
+//! cameras (in its own frame), `up` in scene files, and the fill of an open capture. Data: tests/data/captures (a subset of the shared plant capture) and
 //! tests/data/formats (a subset of the Mip-Splatting donut); see their READMEs.
 
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Mat3, Quat, Vec3};
+use splatter::render::camera::{look_at_rotation, DEFAULT_NEAR};
+use splatter::render::{cpu, Camera, Splats};
 use splatter::run::{Input, Run, RunOptions};
 use splatter::splat::formats::read_splats;
 use splatter::splat::inspect::{inspect, robust_bounds, UpEvidence};
+use splatter::splat::GaussianCloud;
 
 fn data(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -285,4 +288,124 @@ fn plant_dropped_on_a_captured_slab_rests_on_it() {
         lowest < 0.1 - dx,
         "without the collider the plant falls through: {lowest}"
     );
+}
+
+// ---------------------------------------------------------------------------------------------
+// A capture seen from its own training cameras
+// ---------------------------------------------------------------------------------------------
+
+/// A `cameras.json` holding one camera of `width`×`height` looking at the centre of
+/// `cloud`'s robust bounds from a direction off every axis, rolled (its image up is no
+/// axis either), in the capture's own frame; and that camera built here, independently of
+/// the reader.
+fn off_axis_camera(cloud: &GaussianCloud, width: u32, height: u32) -> (String, Camera) {
+    let (lo, hi) = robust_bounds(&cloud.positions);
+    let centre = 0.5 * (lo + hi);
+    let distance = 1.1 * (hi - lo).length();
+    let eye = centre + distance * Vec3::new(0.62, -0.41, 0.67).normalize();
+    let rotation = look_at_rotation(eye, centre, Vec3::new(0.35, -1.0, 0.25));
+    let focal = 0.9 * height as f32;
+    let rows: Vec<[f32; 3]> = (0..3).map(|i| rotation.row(i).to_array()).collect();
+    let json = serde_json::json!([{
+        "id": 0, "img_name": "view_0", "width": width, "height": height,
+        "position": eye.to_array(), "rotation": rows, "fx": focal, "fy": focal,
+    }]);
+    let camera = Camera {
+        position: eye,
+        rotation,
+        fx: focal,
+        fy: focal,
+        width,
+        height,
+        near: DEFAULT_NEAR,
+    };
+    (json.to_string(), camera)
+}
+
+/// Frame 0 of `opts`, rendered on the test adapter (RGBA), with the run's background.
+fn render_frame(opts: RunOptions) -> (Vec<u8>, Vec3) {
+    let out = opts.out.clone().unwrap();
+    let run = Run::prepare(opts).unwrap();
+    let background = Vec3::from(run.scene().output.background);
+    let gpu = splatter::gpu::GpuContext::new(None).expect("a wgpu adapter");
+    run.execute(&gpu, &mut |_| {}).unwrap();
+    let image = image::open(out.join("frame_00000.png")).unwrap().to_rgba8();
+    (image.into_raw(), background)
+}
+
+/// The CPU reference renderer's image of `cloud` as it is in its file (no transform).
+fn reference_image(cloud: &GaussianCloud, m: Mat3, camera: &Camera, background: Vec3) -> Vec<u8> {
+    cpu::render(
+        &Splats::from_cloud(cloud, m, Vec3::ZERO),
+        camera,
+        background,
+    )
+}
+
+/// The CPU reference of the capture stood upright (its up turned to +z, as the orbit quick
+/// look does) scores low against its own-frame image from this camera: the plant is not
+/// symmetric under that quarter turn, so a test against the own-frame image can tell the
+/// two apart.
+fn assert_the_frame_matters(cloud: &GaussianCloud, camera: &Camera, own: &[u8]) {
+    let upright = Mat3::from_quat(Quat::from_rotation_arc(inspect(cloud).up, Vec3::Z));
+    let turned = reference_image(cloud, upright, camera, Vec3::ZERO);
+    let psnr = cpu::psnr(&turned, own);
+    println!("the capture stood upright against its own frame: {psnr:.1} dB");
+    assert!(
+        psnr < 25.0,
+        "the view cannot tell the frames apart: {psnr:.1} dB"
+    );
+}
+
+/// `render --ply F --cameras cameras.json`: the capture is drawn in its own frame, the one
+/// its training cameras were posed in, so the image is the CPU reference's of the
+/// untransformed Gaussians from that camera (PSNR ≥ 40 dB, the golden images' bound for
+/// GPU against CPU).
+#[test]
+fn quick_look_from_a_training_camera_draws_the_capture_in_its_own_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cloud, _) = read_splats(&data(PLANT)).unwrap();
+    let (json, camera) = off_axis_camera(&cloud, 160, 120);
+    let cameras = dir.path().join("cameras.json");
+    std::fs::write(&cameras, json).unwrap();
+    let (image, background) = render_frame(RunOptions {
+        input: Input::Ply {
+            file: data(PLANT),
+            cameras: Some(cameras),
+            camera: Some(0),
+        },
+        out: Some(dir.path().join("frames")),
+        ..RunOptions::default()
+    });
+    let reference = reference_image(&cloud, Mat3::IDENTITY, &camera, background);
+    assert_the_frame_matters(&cloud, &camera, &reference);
+    let psnr = cpu::psnr(&image, &reference);
+    println!("--ply --cameras against the CPU reference in the capture's frame: {psnr:.1} dB");
+    assert!(psnr >= 40.0, "{psnr:.1} dB against the CPU reference");
+}
+
+/// A scene file with the capture untransformed and a `cameras_json` camera path renders
+/// the same view (the scene's frame is the capture's).
+#[test]
+fn scene_with_a_cameras_json_path_draws_the_capture_in_its_own_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (cloud, _) = read_splats(&data(PLANT)).unwrap();
+    let (json, camera) = off_axis_camera(&cloud, 160, 120);
+    std::fs::write(dir.path().join("cameras.json"), json).unwrap();
+    let scene = serde_json::json!({
+        "output": {"width": 160, "height": 120, "frames": 1},
+        "camera": {"path": {"type": "cameras_json", "file": "cameras.json"}},
+        "objects": [{"ply": data(PLANT)}],
+    });
+    let file = dir.path().join("scene.json");
+    std::fs::write(&file, scene.to_string()).unwrap();
+    let (image, background) = render_frame(RunOptions {
+        input: Input::Scene(Some(file)),
+        out: Some(dir.path().join("frames")),
+        ..RunOptions::default()
+    });
+    let reference = reference_image(&cloud, Mat3::IDENTITY, &camera, background);
+    let psnr = cpu::psnr(&image, &reference);
+    println!("scene with cameras_json against the CPU reference: {psnr:.1} dB");
+    assert!(psnr >= 40.0, "{psnr:.1} dB against the CPU reference");
 }

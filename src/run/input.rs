@@ -63,6 +63,9 @@ pub(super) fn load_scene(file: Option<&Path>, opts: &RunOptions) -> Result<(Scen
     scene.apply_quality(opts.quality);
     scene.with_overrides(opts.out.clone(), opts.width, opts.height)?;
     let path = scene.camera_path()?;
+    for w in scene.camera_frame_warnings() {
+        log::warn!("{w}");
+    }
     Ok((scene, path))
 }
 
@@ -88,18 +91,24 @@ pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, Bui
 }
 
 /// `--ply FILE`: the capture alone, stood upright and framed by an orbit round its robust
-/// bounds (docs/captures.md), or seen from a
-/// camera of an INRIA `cameras.json`.
+/// bounds (docs/captures.md), or seen from a camera of an INRIA `cameras.json`. Those
+/// cameras were posed in the capture's own frame (the trainer's), so with them the
+/// capture is drawn untouched: standing it upright would move it out of their view.
 fn quick_look(
     opts: &RunOptions,
     ply: &Path,
     cameras: Option<&Path>,
     camera: Option<usize>,
 ) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
+    let transform = if cameras.is_some() {
+        "{}"
+    } else {
+        r#"{"up": "auto"}"#
+    };
     let text = format!(
         r#"{{"output": {{"width": {w}, "height": {h}, "frames": 60}},
             "camera": {{"fov_y_deg": 50, "path": {{"type": "orbit", "target": [0, 0, 0], "radius": 1}}}},
-            "objects": [{{"ply": {p}, "transform": {{"up": "auto"}}}}]}}"#,
+            "objects": [{{"ply": {p}, "transform": {transform}}}]}}"#,
         w = opts.width.unwrap_or(1280),
         h = opts.height.unwrap_or(720),
         p = serde_json::to_string(&ply.to_string_lossy())?,

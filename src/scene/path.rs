@@ -10,6 +10,37 @@ use super::{mat3_from_rows, rotation_problem, CamerasJsonMode, PathSpec, Scene, 
 use crate::render::camera::{focal_from_fov, look_at_rotation, Camera, DEFAULT_NEAR};
 use crate::spline::{locate, Hermite, Segment};
 
+impl Scene {
+    /// Frames that do not meet: a `cameras_json` path is posed in the frame its trainer
+    /// reconstructed the capture in, so a capture this scene moves (any `transform`,
+    /// `up: "auto"` among them) is no longer where those cameras look. One line per such
+    /// object; the scene still renders as written.
+    pub fn camera_frame_warnings(&self) -> Vec<String> {
+        let PathSpec::CamerasJson(spec) = &self.camera.path else {
+            return Vec::new();
+        };
+        self.objects
+            .iter()
+            .enumerate()
+            .filter(|(_, obj)| obj.ply.is_some())
+            .filter(|(_, obj)| {
+                let (m, t) = obj.transform.affine();
+                !(m.abs_diff_eq(Mat3::IDENTITY, 1e-6) && t == Vec3::ZERO)
+            })
+            .map(|(index, obj)| {
+                format!(
+                    "{}: object {:?} is transformed, but camera.path takes its poses from {}, \
+                     which are in the capture's own frame: its training views will not line \
+                     up (drop the object's transform to render them; docs/captures.md, Frames)",
+                    self.origin,
+                    obj.display_name(index),
+                    spec.file.display()
+                )
+            })
+            .collect()
+    }
+}
+
 /// The camera of every frame of a scene.
 #[derive(Clone, Debug)]
 pub struct CameraPath {
