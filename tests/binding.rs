@@ -3,8 +3,9 @@
 //! Gaussian on each particle the bound run renders the frames of the Gaussians-as-particles
 //! run.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Quat, Vec3};
 use splatter::derive::{Binding, Derive};
@@ -156,20 +157,6 @@ fn bound_gaussians_follow_a_uniform_stretch_exactly() {
     }
 }
 
-fn splatter_cmd(args: &[&str]) -> std::process::Output {
-    let out = Command::new(env!("CARGO_BIN_EXE_splatter"))
-        .args(args)
-        .env("RUST_LOG", "warn")
-        .output()
-        .expect("run splatter");
-    assert!(
-        out.status.success(),
-        "splatter {args:?} failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
 /// A jelly cube dropped on a sticky ground whose Gaussians sit on the lattice the particles
 /// would take (a box of unjittered Gaussians at spacing h, particles at spacing h without
 /// jitter), `particles` as given.
@@ -203,7 +190,10 @@ fn one_gaussian_per_particle_renders_as_the_gaussians_mode() {
     for particles in [r#""gaussians""#, r#"{ "spacing": 0.02, "jitter": 0 }"#] {
         let scene = cube_scene(dir.path(), particles);
         let out = dir.path().join(format!("out_{}", particles.len()));
-        splatter_cmd(&["render", scene.to_str().unwrap(), "--deterministic"]);
+        common::cli::splatter_ok(
+            dir.path(),
+            &["render", scene.to_str().unwrap(), "--deterministic"],
+        );
         let manifest: serde_json::Value =
             serde_json::from_slice(&std::fs::read(out.join("manifest.json")).unwrap()).unwrap();
         assert_eq!(manifest["settings"]["particles"], 1000, "{particles}");

@@ -6,160 +6,18 @@
 //! default output folders (`out/<name>`) never land in the source tree. Renders are tiny
 //! (64×48, one frame): on a machine without a GPU they run on lavapipe, a CPU Vulkan driver.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::cli::*;
 use glam::{Quat, Vec3};
 use splatter::splat::ply::{write_ply, PlyFormat};
 use splatter::splat::GaussianCloud;
-use tempfile::TempDir;
-
-// ---------------------------------------------------------------------------------------------
-// Running the binary
-// ---------------------------------------------------------------------------------------------
-
-/// Run `splatter ARGS` with `cwd` as the current directory.
-///
-/// `RUST_LOG` is removed so the binary's own default log filter applies (warnings only), and
-/// `RUST_BACKTRACE` so that a panic always prints its `RUST_BACKTRACE` hint (which the
-/// no-panic check looks for) rather than a backtrace.
-fn splatter(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splatter"))
-        .args(args)
-        .current_dir(cwd)
-        .env_remove("RUST_LOG")
-        .env_remove("RUST_BACKTRACE")
-        .output()
-        .expect("the splatter binary runs")
-}
-
-/// Lines that graphics drivers print on their own, which the binary cannot suppress.
-///
-/// When wgpu enumerates adapters (every render and `info`), Mesa's GL/EGL stack and lavapipe
-/// write straight to the process's stderr: `error: XDG_RUNTIME_DIR is invalid or not set in
-/// the environment.` (from the Wayland/EGL platform probe — note it even starts with
-/// `error: `), `[ERROR] EGL …` (wgpu-hal's EGL callback, logged through env_logger), `MESA…`
-/// diagnostics and `WARNING: lavapipe is not a conformant vulkan implementation…`. They depend
-/// on the machine, not on the input, so they are ignored when counting error lines.
-fn is_driver_noise(line: &str) -> bool {
-    line.contains("XDG_RUNTIME_DIR")
-        || line.starts_with("[ERROR] EGL")
-        || line.starts_with("MESA")
-        || line.starts_with("WARNING: lavapipe")
-}
-
-/// stderr without driver noise and blank lines.
-fn stderr_lines(out: &Output) -> Vec<String> {
-    String::from_utf8_lossy(&out.stderr)
-        .lines()
-        .filter(|l| !l.trim().is_empty() && !is_driver_noise(l))
-        .map(str::to_string)
-        .collect()
-}
-
-fn describe(out: &Output) -> String {
-    format!(
-        "exit status: {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
-/// The run did not panic.
-fn assert_no_panic(out: &Output) {
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
-        "the binary panicked:\n{}",
-        describe(out)
-    );
-}
-
-/// The run failed cleanly: non-zero exit, no panic, exactly one (non-noise) stderr line and it
-/// starts with `error: `. Returns that line.
-fn expect_error(out: &Output) -> String {
-    assert_no_panic(out);
-    assert!(
-        !out.status.success(),
-        "expected a non-zero exit:\n{}",
-        describe(out)
-    );
-    assert!(
-        out.status.code().is_some(),
-        "killed by a signal, not a clean exit:\n{}",
-        describe(out)
-    );
-    let lines = stderr_lines(out);
-    assert_eq!(
-        lines.len(),
-        1,
-        "expected exactly one stderr line:\n{}",
-        describe(out)
-    );
-    let line = lines.into_iter().next().unwrap();
-    assert!(
-        line.starts_with("error: "),
-        "the stderr line should start with `error: `:\n{}",
-        describe(out)
-    );
-    line
-}
-
-/// The run failed cleanly after rendering had started: like [`expect_error`], except that the
-/// progress lines printed before the failure (`adapter: …`, `scene: …`, `frame 1/1 …`) are
-/// allowed. Exactly one line starts with `error: `, and it is the last one. Returns it.
-fn expect_late_error(out: &Output) -> String {
-    assert_no_panic(out);
-    assert!(
-        !out.status.success() && out.status.code().is_some(),
-        "expected a non-zero exit:\n{}",
-        describe(out)
-    );
-    let lines = stderr_lines(out);
-    let errors: Vec<&String> = lines.iter().filter(|l| l.starts_with("error: ")).collect();
-    assert_eq!(
-        errors.len(),
-        1,
-        "expected exactly one `error: ` line:\n{}",
-        describe(out)
-    );
-    assert_eq!(
-        lines.last(),
-        Some(errors[0]),
-        "the error should be the last line:\n{}",
-        describe(out)
-    );
-    errors[0].clone()
-}
-
-/// `line` contains every one of `needles`.
-fn assert_mentions(line: &str, needles: &[&str]) {
-    for n in needles {
-        assert!(line.contains(n), "the error should mention {n:?}: {line}");
-    }
-}
-
-/// The run succeeded without a panic.
-fn expect_success(out: &Output) {
-    assert_no_panic(out);
-    assert!(out.status.success(), "expected success:\n{}", describe(out));
-}
 
 // ---------------------------------------------------------------------------------------------
 // Inputs
 // ---------------------------------------------------------------------------------------------
-
-/// A fresh directory to run in.
-fn workdir() -> TempDir {
-    tempfile::tempdir().expect("a temporary directory")
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).expect("write a test input");
-    path
-}
 
 /// A small procedural sphere (about 500 Gaussians at this spacing).
 const SPHERE: &str = r#"{"procedural": {"shape": "sphere", "radius": 0.5, "spacing": 0.1, "color": [0.9, 0.2, 0.1]}}"#;
@@ -717,6 +575,44 @@ fn camera_from_cameras_json_renders() {
     assert_eq!(img.dimensions(), (64, 48), "the size of the file's camera");
 }
 
+/// A scene whose camera path is a `cameras.json` and whose capture is transformed says, in
+/// one warning line, that the training views will not line up (the cameras are in the
+/// capture's own frame); the untransformed capture renders without it.
+#[test]
+fn cameras_json_path_with_a_transformed_capture_warns() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    write(dir.path(), "cameras.json", CAMERAS_JSON);
+    let scene = |transform: &str| {
+        format!(
+            r#"{{"output": {{"width": 64, "height": 48, "frames": 1}},
+                "camera": {{"path": {{"type": "cameras_json", "file": "cameras.json"}}}},
+                "objects": [{{"name": "capture", "ply": "tiny.ply"{transform}}}]}}"#
+        )
+    };
+    let warnings = |out: &std::process::Output| -> Vec<String> {
+        stderr_lines(out)
+            .into_iter()
+            .filter(|l| l.contains("training views will not line up"))
+            .collect()
+    };
+    write(
+        dir.path(),
+        "moved.json",
+        &scene(r#", "transform": {"up": "-y"}"#),
+    );
+    let out = splatter(dir.path(), &["render", "moved.json", "--out", "a"]);
+    expect_success(&out);
+    let lines = warnings(&out);
+    assert_eq!(lines.len(), 1, "{}", describe(&out));
+    assert_mentions(&lines[0], &["moved.json", "\"capture\"", "cameras.json"]);
+
+    write(dir.path(), "own.json", &scene(""));
+    let out = splatter(dir.path(), &["render", "own.json", "--out", "b"]);
+    expect_success(&out);
+    assert!(warnings(&out).is_empty(), "{}", describe(&out));
+}
+
 #[test]
 fn schema_is_json_with_properties() {
     let dir = workdir();
@@ -918,14 +814,27 @@ fn sim_scene(frames: u32, dt: &str, e: f64) -> String {
     )
 }
 
-/// A simulated scene renders frame by frame: two frames, the cube moves between them.
+/// A simulated scene renders frame by frame, and what it renders is the simulated state:
+/// the cube's exported Gaussians fall between frames 1 and 2 (it starts at 1 m/s downwards
+/// under gravity, its bottom well above the ground), and the frames show it. The state is
+/// read, not the images alone: the orbit camera moves every frame, so two images would
+/// differ with the simulation frozen.
 #[test]
 fn simulated_scene_renders_moving_frames() {
     let dir = workdir();
     write(dir.path(), "sim.json", &sim_scene(3, "", 200.0));
     let out = splatter(
         dir.path(),
-        &["render", "sim.json", "--out", "frames", "--frames", "1..3"],
+        &[
+            "render",
+            "sim.json",
+            "--out",
+            "frames",
+            "--frames",
+            "1..3",
+            "--export-ply",
+            "states",
+        ],
     );
     expect_success(&out);
     assert!(
@@ -937,16 +846,17 @@ fn simulated_scene_renders_moving_frames() {
         list(&dir.path().join("frames")),
         ["frame_00001.png", "frame_00002.png"]
     );
-    let a = image::open(dir.path().join("frames/frame_00001.png"))
-        .unwrap()
-        .to_rgb8();
-    let b = image::open(dir.path().join("frames/frame_00002.png"))
-        .unwrap()
-        .to_rgb8();
-    assert_ne!(
-        a.as_raw(),
-        b.as_raw(),
-        "the simulated cube should move between frames"
+    let mean_z = |frame: &str| {
+        let path = dir.path().join("states").join(frame);
+        let (cloud, _) = splatter::splat::formats::read_splats(&path).unwrap();
+        cloud.positions.iter().map(|p| f64::from(p.z)).sum::<f64>() / cloud.len() as f64
+    };
+    // Free fall over one frame (1/24 s) from v = −1 m/s at t = 1/24 s: the centre drops
+    // v·Δt + g·t·Δt + g·Δt²/2 = 0.0417 + 0.0170 + 0.0085 = 0.067.
+    let drop = mean_z("frame_00001.ply") - mean_z("frame_00002.ply");
+    assert!(
+        (drop - 0.067).abs() < 0.01,
+        "the cube's centre should fall 0.067 between frames 1 and 2, fell {drop}"
     );
 }
 

@@ -3,46 +3,13 @@
 //! A two-machine split, reproduced here with two processes running at the same time into
 //! one folder, gives frames byte-identical to a single process rendering every frame.
 
-use std::path::Path;
-use std::process::{Command, Output, Stdio};
+mod common;
 
+use std::process::Stdio;
+
+use common::cli::{command, expect_success, frames_in, splatter as run};
+use splatter::render::cpu::psnr;
 use tempfile::TempDir;
-
-fn command(cwd: &Path, args: &[&str]) -> Command {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_splatter"));
-    cmd.args(args)
-        .current_dir(cwd)
-        .env_remove("RUST_LOG")
-        .env_remove("RUST_BACKTRACE")
-        .env_remove("SPLATTER_FAIL_AT_FRAME");
-    cmd
-}
-
-fn expect_success(out: &Output) {
-    assert!(
-        out.status.success(),
-        "expected success ({:?}):\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn run(cwd: &Path, args: &[&str]) -> Output {
-    command(cwd, args).output().expect("the binary runs")
-}
-
-fn frames_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with("frame_") && n.ends_with(".png"))
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    names
-}
 
 /// A jelly cube on a static checker slab (static and simulated Gaussians), 6 frames.
 const SCENE: &str = r#"{
@@ -60,20 +27,6 @@ const SCENE: &str = r#"{
      "physics": {"material": {"model": "fixed_corotated", "E": 300, "nu": 0.3, "density": 2}, "velocity": [0, 0, -1.5]}}
   ]
 }"#;
-
-fn psnr(a: &[u8], b: &[u8]) -> f64 {
-    let mse = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (f64::from(*x) - f64::from(*y)).powi(2))
-        .sum::<f64>()
-        / a.len() as f64;
-    if mse == 0.0 {
-        f64::INFINITY
-    } else {
-        10.0 * (255.0f64 * 255.0 / mse).log10()
-    }
-}
 
 #[test]
 fn a_split_over_two_processes_equals_a_single_run() {

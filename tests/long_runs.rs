@@ -8,87 +8,19 @@
 //! 86) just before frame k, losing frames still queued for writing, as a crash would.
 //! Renders are tiny (64×48) so that each run takes about a second on lavapipe.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
+use std::path::Path;
+use std::process::Output;
+
+use common::cli::{
+    describe, expect_late_error as expect_error, expect_success, frames_in, splatter, splatter_env,
+    write,
+};
 use tempfile::TempDir;
-
-fn splatter_env(cwd: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_splatter"));
-    cmd.args(args)
-        .current_dir(cwd)
-        .env_remove("RUST_LOG")
-        .env_remove("RUST_BACKTRACE")
-        .env_remove("SPLATTER_FAIL_AT_FRAME");
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    cmd.output().expect("the splatter binary runs")
-}
-
-fn splatter(cwd: &Path, args: &[&str]) -> Output {
-    splatter_env(cwd, args, &[])
-}
-
-fn describe(out: &Output) -> String {
-    format!(
-        "exit status: {:?}\n--- stderr ---\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn expect_success(out: &Output) {
-    assert!(
-        out.status.success() && !stderr(out).contains("panicked"),
-        "expected success:\n{}",
-        describe(out)
-    );
-}
-
-/// Non-zero exit, no panic, and the last `error: ` line (driver noise aside).
-fn expect_error(out: &Output) -> String {
-    let err = stderr(out);
-    assert!(
-        !out.status.success(),
-        "expected failure:\n{}",
-        describe(out)
-    );
-    assert!(
-        !err.contains("panicked") && !err.contains("RUST_BACKTRACE"),
-        "{}",
-        describe(out)
-    );
-    let lines: Vec<&str> = err
-        .lines()
-        .filter(|l| l.starts_with("error: ") && !l.contains("XDG_RUNTIME_DIR"))
-        .collect();
-    assert_eq!(lines.len(), 1, "one error line:\n{}", describe(out));
-    lines[0].to_string()
-}
-
-fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
-
-/// The `frame_*.png` names in `dir`, sorted.
-fn frames_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.starts_with("frame_") && n.ends_with(".png"))
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    names
 }
 
 fn bytes(path: &Path) -> Vec<u8> {

@@ -86,10 +86,47 @@ fn points_lie_inside_every_shape_even_with_full_jitter() {
         for p in &c.positions {
             assert!(inside(&shape, *p), "{shape:?}: {p} is outside");
         }
-        // Jitter really moved points off the lattice: some reach the boundary.
-        let (lo, hi) = c.bounds().unwrap();
-        let extent = hi - lo;
-        assert!(extent.min_element() > 0.0, "{shape:?}");
+    }
+}
+
+/// Jitter moves every point off its lattice site by a uniform offset of up to
+/// `jitter · spacing` per axis, then clamps it into the solid (the nearest point of a convex
+/// solid, which brings it no farther from its site, itself inside). Against the same spec
+/// without jitter (the same sites in the same order): no point is farther from its site than
+/// the offset's largest length, √3 · jitter · spacing, and the mean offset per axis is the
+/// uniform distribution's, jitter · spacing / 2, less what the clamp takes back near the
+/// surface.
+#[test]
+fn jitter_moves_points_off_the_lattice_by_up_to_its_bound() {
+    let spacing = 0.05;
+    for shape in shapes() {
+        let jittered = spec(shape.clone(), spacing).generate().unwrap();
+        let lattice = ProceduralSpec {
+            jitter: 0.0,
+            ..spec(shape.clone(), spacing)
+        }
+        .generate()
+        .unwrap();
+        assert_eq!(jittered.len(), lattice.len(), "{shape:?}: the same sites");
+        let bound = 0.5 * spacing;
+        let mut mean = Vec3::ZERO;
+        for (p, site) in jittered.positions.iter().zip(&lattice.positions) {
+            let offset = *p - *site;
+            assert!(
+                offset.length() <= 3f32.sqrt() * bound * (1.0 + 1e-4),
+                "{shape:?}: {p} is {offset} from its site {site}, beyond √3·jitter·spacing"
+            );
+            mean += offset.abs();
+        }
+        mean /= jittered.len() as f32;
+        let expected = 0.5 * bound;
+        println!("{shape:?}: mean |offset| {mean} (uniform: {expected})");
+        for axis in 0..3 {
+            assert!(
+                (0.9 * expected..=1.05 * expected).contains(&mean[axis]),
+                "{shape:?}: mean offset {mean} along axis {axis}, expected about {expected}"
+            );
+        }
     }
 }
 

@@ -3,8 +3,10 @@
 //! showing their motion; the relit scene's lighting reaches the image; the fracture
 //! examples break, hold together or slump as they should.
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use glam::Vec3;
 use splatter::gpu::GpuContext;
@@ -12,12 +14,9 @@ use splatter::render::splats::{mat3_from_sym3, sym3_from_mat3};
 use splatter::render::{cpu, Camera, GpuRenderer, Splats};
 use splatter::scene::{self, quality::Quality};
 
+/// `splatter ARGS` in the package root (the scenes' paths are absolute).
 fn splatter(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splatter"))
-        .args(args)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run splatter")
+    common::cli::splatter(Path::new(env!("CARGO_MANIFEST_DIR")), args)
 }
 
 fn scenes() -> Vec<PathBuf> {

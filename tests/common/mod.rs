@@ -2,6 +2,8 @@
 //! uses only part of it.
 #![allow(dead_code)]
 
+pub mod cli;
+
 use splatter::sim::nacc::{Case3Variant, NaccParams};
 
 /// The paper's fruit material (docs/method.md §9: kiwi/dragonfruit class).

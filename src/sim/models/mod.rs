@@ -164,16 +164,63 @@ pub fn wgsl() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wgpu::naga;
 
-    #[test]
-    fn codes_are_positions_and_names_are_unique() {
-        for (i, m) in ElasticModel::ALL.iter().enumerate() {
-            assert_eq!(m.code() as usize, i);
-            assert_eq!(ElasticModel::from_name(m.def().name), Some(*m));
+    /// The value of the WGSL constant `name` in `module`, as naga reads it.
+    fn wgsl_u32_constant(module: &naga::Module, name: &str) -> Option<u32> {
+        let (_, c) = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(name))?;
+        match module.global_expressions[c.init] {
+            naga::Expression::Literal(naga::Literal::U32(v)) => Some(v),
+            ref other => panic!("{name} = {other:?}: expected a u32 literal"),
         }
-        for (i, m) in PlasticModel::ALL.iter().enumerate() {
-            assert_eq!(m.code() as usize, i);
-            assert_eq!(PlasticModel::from_name(m.def().name), Some(*m));
+    }
+
+    /// The code each model carries to the GPU (written into `SimMaterial` by the Rust
+    /// side) is the value of its `ELASTIC_*`/`PLASTIC_*` constant in the generated WGSL, as
+    /// an independent parser (naga) reads it after the whole library validates; the codes
+    /// and names are distinct, so no two models share a dispatch case.
+    #[test]
+    fn wgsl_constants_are_the_codes_the_gpu_record_carries() {
+        let src = format!("{}\n{}", super::super::wgsl::library(), wgsl());
+        let module = naga::front::wgsl::parse_str(&src)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::empty(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        let mut seen = std::collections::HashSet::new();
+        let elastic = ElasticModel::ALL
+            .iter()
+            .map(|m| ("ELASTIC", m.def().name, m.code()));
+        let plastic = PlasticModel::ALL
+            .iter()
+            .map(|m| ("PLASTIC", m.def().name, m.code()));
+        for (kind, name, code) in elastic.chain(plastic) {
+            let constant = format!("{kind}_{}", name.to_uppercase());
+            assert_eq!(
+                wgsl_u32_constant(&module, &constant),
+                Some(code),
+                "{constant} against the code Rust writes"
+            );
+            assert!(
+                seen.insert((kind, code)),
+                "{constant}: code {code} taken twice"
+            );
+        }
+        for names in [
+            ElasticModel::ALL
+                .iter()
+                .map(|m| m.def().name)
+                .collect::<Vec<_>>(),
+            PlasticModel::ALL.iter().map(|m| m.def().name).collect(),
+        ] {
+            let unique: std::collections::HashSet<_> = names.iter().collect();
+            assert_eq!(unique.len(), names.len(), "model names {names:?}");
         }
     }
 

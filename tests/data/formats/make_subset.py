@@ -2,11 +2,13 @@
 """Deterministic subset of a binary little-endian 3DGS PLY: keep every k-th Gaussian.
 
 Usage: make_subset.py INPUT.ply OUTPUT.ply [--target N | --every K]
+       make_subset.py INPUT.splat OUTPUT.splat [--target N | --every K]
 
 Records are copied byte for byte (no float round trip), so the subset holds exactly
 the values of the source rows 0, K, 2K, ...  The header is copied unchanged except for
-the `element vertex` count.  Default: K = max(1, n // 4000) (donut: 45,624 // 4000 = 11,
-which keeps 4,148 Gaussians).  Standard library only.
+the `element vertex` count.  An antimatter15 `.splat` (no header, 32-byte records) is
+cut the same way.  Default: K = max(1, n // 4000) (donut: 45,624 // 4000 = 11, which
+keeps 4,148 Gaussians).  Standard library only.
 """
 import argparse
 import sys
@@ -54,17 +56,23 @@ def main():
 
     with open(a.input, "rb") as f:
         data = f.read()
-    lines, body, n, stride = read_header(data)
+    if a.input.endswith(".splat"):
+        lines, body, n, stride = None, 0, len(data) // 32, 32
+        if len(data) % 32:
+            sys.exit("a .splat holds whole 32-byte records")
+    else:
+        lines, body, n, stride = read_header(data)
     if len(data) < body + n * stride:
         sys.exit("file is shorter than its header says")
     k = a.every if a.every > 0 else max(1, n // a.target)
     keep = range(0, n, k)
-    out_lines = [
-        ("element vertex %d" % len(keep)) if ln.startswith("element vertex ") else ln
-        for ln in lines
-    ]
     with open(a.output, "wb") as f:
-        f.write("\n".join(out_lines).encode("ascii"))
+        if lines is not None:
+            out_lines = [
+                ("element vertex %d" % len(keep)) if ln.startswith("element vertex ") else ln
+                for ln in lines
+            ]
+            f.write("\n".join(out_lines).encode("ascii"))
         for i in keep:
             o = body + i * stride
             f.write(data[o:o + stride])
