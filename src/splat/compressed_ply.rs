@@ -30,15 +30,6 @@ const PACKED: [&str; 4] = [
     "packed_color",
 ];
 
-/// Whether a PLY header is a compressed PLY (a `chunk` element and packed vertices).
-pub fn is_compressed(header: &Header) -> bool {
-    header.elements.contains_key("chunk")
-        && header
-            .elements
-            .get("vertex")
-            .is_some_and(|v| v.properties.contains_key("packed_position"))
-}
-
 fn damaged(file: &str, what: impl Into<String>) -> SplatError {
     SplatError::Damaged {
         file: file.to_string(),

@@ -307,37 +307,6 @@ impl GpuRenderer {
         self.lighting.as_ref().map(|l| &l.shading)
     }
 
-    /// Replace the normals of Gaussians `offset..offset + normals.len()` (e.g. recomputed in
-    /// the deformed configuration); their materials stay.
-    pub fn update_normals(
-        &mut self,
-        gpu: &GpuContext,
-        offset: usize,
-        normals: &[Vec3],
-    ) -> Result<(), GpuError> {
-        let Some(l) = &self.lighting else {
-            return Ok(());
-        };
-        let end = offset + normals.len();
-        if end > l.rest_shading.len() {
-            return Err(GpuError::Failed(format!(
-                "normals for Gaussians {offset}..{end} of {}",
-                l.rest_shading.len()
-            )));
-        }
-        let records: Vec<[u32; 2]> = normals
-            .iter()
-            .zip(&l.rest_shading[offset..end])
-            .map(|(n, r)| [crate::relight::oct_encode(*n), r[1]])
-            .collect();
-        gpu.queue.write_buffer(
-            &l.shading,
-            (offset * 8) as u64,
-            bytemuck::cast_slice(&records),
-        );
-        Ok(())
-    }
-
     /// The shading records given to [`set_lighting`](Self::set_lighting) (packed rest
     /// normal, material per Gaussian), if lighting is set.
     pub fn rest_shading(&self) -> Option<&[[u32; 2]]> {
