@@ -208,10 +208,12 @@ pub(crate) struct RenderArgs {
     /// magnitude smaller than PLY, opened by web viewers): DIR/frame_00000.spz, …
     #[arg(long, value_name = "DIR")]
     pub(crate) export_spz: Option<PathBuf>,
-    /// Quick look at a 3DGS PLY file without a scene file: an orbit framing its bounds.
+    /// Quick look at a capture (any splat format) without a scene file: stood upright
+    /// and orbited, framing its robust bounds.
     #[arg(long, conflicts_with = "scene")]
     pub(crate) ply: Option<PathBuf>,
-    /// With --ply: an INRIA 3DGS cameras.json to take the camera from.
+    /// With --ply: an INRIA 3DGS cameras.json to take the camera from. The capture is
+    /// then drawn untouched, in its own frame, where a trainer posed those cameras.
     #[arg(long, requires = "ply")]
     pub(crate) cameras: Option<PathBuf>,
     /// With --cameras: index of the camera in cameras.json (default 0).

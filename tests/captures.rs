@@ -1,6 +1,6 @@
 //! Real captures as users bring them: the up axis and support `inspect` estimates, the
 //! upright, framed quick look of `render --ply`, the capture seen from its own training
-//! cameras (in its own frame), `up` in scene files, and the fill of an open capture. Data: tests/data/captures (a subset of the shared plant capture) and
+//! cameras (in its own frame), `up` in scene files, and the fill of an open capture. Data: tests/data/captures (subsets of a real plant capture) and
 //! tests/data/formats (a subset of the Mip-Splatting donut); see their READMEs.
 
 use std::path::{Path, PathBuf};

@@ -1,12 +1,11 @@
 #!/usr/bin/env bash
 # Rebuilds the fixtures in this folder (and, with --full, the benchmark files) from the
-# shared 3DGS data with PlayCanvas splat-transform.  See README.md.
+# source captures with PlayCanvas splat-transform.  See README.md.
 #
 #   make.sh [--install] [--full] [DATA_DIR]
 #
-# DATA_DIR   the shared data folder (donut_mip_splatting.ply, plant.ply).  Default: $DATA_DIR
-#            if set, else ../../../../shared/data relative to this script (/work/shared/data
-#            for a checkout at /work/main).
+# DATA_DIR   a folder holding the source captures, donut_mip_splatting.ply and plant.ply
+#            (where to get them: README.md, Attribution); or set $DATA_DIR.
 # --install  first install splat-transform 3.7.0 and node 22 into $ST_DIR with npm.
 # --full     also write the full-size plant conversions and the ~1M-Gaussian benchmark
 #            PLY (+ its SPZ) into $OUT_FULL (not the repo: too big).
@@ -27,7 +26,7 @@ while [[ "${1:-}" == --* ]]; do
   esac
   shift
 done
-data="${1:-${DATA_DIR:-$here/../../../../shared/data}}"
+data="${1:-${DATA_DIR:?usage: make.sh [--install] [--full] DATA_DIR (the folder holding donut_mip_splatting.ply and plant.ply)}}"
 data="$(cd "$data" && pwd)"
 stdir="${ST_DIR:-/tmp/st}"
 back="${OUT_BACK:-/tmp/formats_rt}"
