@@ -818,11 +818,17 @@ fn sim_scene(frames: u32, dt: &str, e: f64) -> String {
 /// the cube's exported Gaussians fall between frames 1 and 2 (it starts at 1 m/s downwards
 /// under gravity, its bottom well above the ground), and the frames show it. The state is
 /// read, not the images alone: the orbit camera moves every frame, so two images would
-/// differ with the simulation frozen.
+/// differ with the simulation frozen. The same with the FLIP/PIC blend, which carries a
+/// free fall exactly too.
 #[test]
 fn simulated_scene_renders_moving_frames() {
+    simulated_cube_falls("");
+    simulated_cube_falls(r#""transfer": {"flip": 0.7},"#);
+}
+
+fn simulated_cube_falls(transfer: &str) {
     let dir = workdir();
-    write(dir.path(), "sim.json", &sim_scene(3, "", 200.0));
+    write(dir.path(), "sim.json", &sim_scene(3, transfer, 200.0));
     let out = splatter(
         dir.path(),
         &[
@@ -856,8 +862,29 @@ fn simulated_scene_renders_moving_frames() {
     let drop = mean_z("frame_00001.ply") - mean_z("frame_00002.ply");
     assert!(
         (drop - 0.067).abs() < 0.01,
-        "the cube's centre should fall 0.067 between frames 1 and 2, fell {drop}"
+        "{transfer}: the cube's centre should fall 0.067 between frames 1 and 2, fell {drop}"
     );
+}
+
+/// `simulation.transfer` out of range or misspelt: one error line naming the field and
+/// what it takes.
+#[test]
+fn bad_transfer_is_reported() {
+    let line = render_scene_error(
+        "flip.json",
+        &sim_scene(1, r#""transfer": {"flip": 1.5},"#, 200.0),
+        &[],
+    );
+    assert_mentions(
+        &line,
+        &["flip.json", "simulation.transfer.flip", "1.5", "[0, 1]"],
+    );
+    let line = render_scene_error(
+        "pic.json",
+        &sim_scene(1, r#""transfer": "pic","#, 200.0),
+        &[],
+    );
+    assert_mentions(&line, &["pic.json", "transfer", "\"apic\"", "flip"]);
 }
 
 /// A step far above the CFL bound: a warning names the suggested Δt, then the watchdog

@@ -54,11 +54,26 @@ fn run(
     }
 }
 
+/// The transfers: APIC, PIC, and FLIP/PIC blends.
+const TRANSFERS: [Transfer; 4] = [
+    Transfer::Apic,
+    Transfer::FlipPic { flip: 0.0 },
+    Transfer::FlipPic { flip: 0.7 },
+    Transfer::FlipPic { flip: 1.0 },
+];
+
 /// Test 1: Free fall, no wall touched, zero stress: symplectic Euler (v before x) gives
-/// x_n = x₀ + n v₀ Δt + g Δt² n(n+1)/2 and v_n = v₀ + n g Δt; F stays I.
+/// x_n = x₀ + n v₀ Δt + g Δt² n(n+1)/2 and v_n = v₀ + n g Δt; F stays I. With every
+/// transfer: a uniform velocity field is carried exactly by APIC, PIC and FLIP alike.
 /// Tolerance: 1e-12 on positions (domain of size 1), velocities and F − I (round-off).
 #[test]
 fn free_fall_matches_the_discrete_formula() {
+    for transfer in TRANSFERS {
+        free_fall(transfer);
+    }
+}
+
+fn free_fall(transfer: Transfer) {
     let dx = 1.0 / 16.0;
     let mut g = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
     let mats = [Material::fixed_corotated(1e4, 0.3)];
@@ -68,7 +83,10 @@ fn free_fall_matches_the_discrete_formula() {
     let x0 = p.x.clone();
     let (dt, steps) = (1e-3, 200);
     let gv = DVec3::new(0.0, -G, 0.0);
-    let sp = params(dt, gv, Boundaries::default());
+    let sp = StepParams {
+        transfer,
+        ..params(dt, gv, Boundaries::default())
+    };
     let (mut ex, mut ev, mut ef) = (0.0f64, 0.0f64, 0.0f64);
     run(&mut p, &mut g, &mats, &sp, steps, |n, p| {
         let nf = n as f64;
@@ -80,7 +98,7 @@ fn free_fall_matches_the_discrete_formula() {
         }
     });
     println!(
-        "free fall, {} particles, {steps} steps: max |x − formula| = {ex:.2e}, \
+        "free fall ({transfer:?}), {} particles, {steps} steps: max |x − formula| = {ex:.2e}, \
          max |v − formula| = {ev:.2e}, max |F − I| = {ef:.2e} (tol 1e-12)",
         p.len()
     );
@@ -132,7 +150,9 @@ fn p2g_conserves_mass_momentum_and_angular_momentum() {
 /// Test 3: A rigidly rotating elastic ball (v = ω × r, C = skew(ω)), no gravity, no wall
 /// touched: APIC keeps its angular momentum within 1% over 100 steps (it conserves it to
 /// round-off: transfers, advection and symmetric stress all preserve Σ x × m v + spin).
-/// PIC is printed for contrast.
+/// PIC filters the rotation through the grid every step and loses a large share of it;
+/// FLIP carries the particles' own velocities and loses little; a blend lies in between,
+/// in the order of its FLIP share.
 #[test]
 fn rigid_rotation_keeps_angular_momentum_with_apic() {
     let dx = 1.0 / 24.0;
@@ -148,15 +168,15 @@ fn rigid_rotation_keeps_angular_momentum_with_apic() {
     }
     let dt = cfl_dt(&mat, density, dx, 0.4);
     let steps = 100;
-    let mut drift = [0.0; 2];
-    for (slot, transfer) in [Transfer::Apic, Transfer::Pic].into_iter().enumerate() {
+    let mut drift = [0.0; 4];
+    for (slot, transfer) in TRANSFERS.into_iter().enumerate() {
         let mut p = p0.clone();
         let mut g = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
         let sp = StepParams {
             transfer,
             ..params(dt, DVec3::ZERO, Boundaries::default())
         };
-        let apic = transfer == Transfer::Apic;
+        let apic = transfer.apic();
         let l0 = p.angular_momentum(center, dx, apic);
         let mut worst = 0.0f64;
         run(&mut p, &mut g, &mats, &sp, steps, |_, p| {
@@ -167,13 +187,81 @@ fn rigid_rotation_keeps_angular_momentum_with_apic() {
     }
     println!(
         "rigid rotation, {} particles, {steps} steps of Δt = {dt:.2e} (ω t = {:.2} rad): \
-         max |ΔL|/|L| APIC = {:.1e} (tol 1e-2), PIC = {:.1e}",
+         max |ΔL|/|L| APIC = {:.1e} (tol 1e-2), PIC = {:.1e}, FLIP 0.7 = {:.1e}, FLIP 1 = {:.1e}",
         p0.len(),
         omega.length() * dt * steps as f64,
         drift[0],
-        drift[1]
+        drift[1],
+        drift[2],
+        drift[3]
     );
     assert!(drift[0] < 1e-2);
+    assert!(drift[1] > 0.2, "PIC should lose much of the rotation");
+    assert!(drift[3] < 0.05, "FLIP should keep the rotation");
+    assert!(drift[1] > drift[2] && drift[2] > drift[3], "{drift:?}");
+}
+
+/// Test 3b: An elastic ball in free flight, translating and spinning, no gravity, no wall
+/// touched. Every transfer conserves linear momentum (P2G and G2P both do, and the
+/// internal forces sum to zero): M v₀ to 1e-12 relative. Energy (kinetic + elastic): PIC
+/// keeps the translation and dissipates the spin, so what it keeps is the translation's
+/// share ½ M |v₀|² / E₀ (within 0.02); pure FLIP keeps the energy (within 3%); a blend
+/// keeps more than PIC.
+#[test]
+fn flip_pic_blend_conserves_momentum_and_orders_dissipation() {
+    let dx = 1.0 / 24.0;
+    let density = 1000.0;
+    let mat = Material::fixed_corotated(1e5, 0.3);
+    let mats = [mat];
+    let center = DVec3::splat(0.5);
+    let (v0, omega) = (DVec3::new(0.4, -0.2, 0.1), DVec3::new(0.0, 3.0, 4.0));
+    let mut p0 = Particles::sample_sphere(center, 0.2, dx / 2.0, density);
+    for q in 0..p0.len() {
+        p0.v[q] = v0 + omega.cross(p0.x[q] - center);
+        p0.c[q] = skew(omega);
+    }
+    let dt = cfl_dt(&mat, density, dx, 0.4);
+    let steps = 100;
+    let energy = |p: &Particles| -> f64 {
+        (0..p.len())
+            .map(|q| {
+                let psi = mat.elastic_model().energy_density(p.f[q], &mat.lame());
+                0.5 * p.mass[q] * p.v[q].length_squared() + psi * p.volume0[q]
+            })
+            .sum()
+    };
+    let e0 = energy(&p0);
+    let m0 = p0.momentum();
+    let mut kept = Vec::new();
+    for transfer in TRANSFERS {
+        let mut p = p0.clone();
+        let mut g = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+        let sp = StepParams {
+            transfer,
+            ..params(dt, DVec3::ZERO, Boundaries::default())
+        };
+        let mut dm = 0.0f64;
+        run(&mut p, &mut g, &mats, &sp, steps, |_, p| {
+            dm = dm.max((p.momentum() - m0).length() / m0.length());
+        });
+        let share = energy(&p) / e0;
+        println!("{transfer:?}: energy kept {share:.4}, max |ΔP|/|P| {dm:.1e} (tol 1e-12)");
+        assert!(dm < 1e-12, "{transfer:?}: momentum drift {dm:e}");
+        kept.push(share);
+    }
+    let translation = 0.5 * p0.total_mass() * v0.length_squared() / e0;
+    let (apic, pic, blend, flip) = (kept[0], kept[1], kept[2], kept[3]);
+    println!("translation's share of the energy: {translation:.4}");
+    assert!((apic - 1.0).abs() < 0.01, "APIC keeps the energy: {apic}");
+    assert!((flip - 1.0).abs() < 0.03, "FLIP keeps the energy: {flip}");
+    assert!(
+        (pic - translation).abs() < 0.02,
+        "PIC keeps the translation only: {pic} against {translation}"
+    );
+    assert!(
+        blend > pic + 0.01,
+        "the blend keeps more than PIC: {kept:?}"
+    );
 }
 
 /// Test 4: First axial mode of an elastic bar clamped at one end: period 4L/c within 3%.

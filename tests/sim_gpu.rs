@@ -383,6 +383,59 @@ fn gpu_nacc_step_matches_the_cpu_reference() {
     }
 }
 
+/// The release's FLIP/PIC blend (FLIP share 0.7) on the GPU: the elastic cube on the
+/// frictional slope and the NACC sphere on the sticky ground follow the CPU reference to
+/// the bounds of their APIC tests (positions), and the particle velocities, which the
+/// blend sets from the grid's velocity changes, to the same share of the speeds.
+#[test]
+fn gpu_flip_pic_blend_matches_the_cpu_reference() {
+    let blend = Transfer::FlipPic { flip: 0.7 };
+    let slope = PlaneCollider {
+        point: DVec3::new(0.5, 0.3, 0.5),
+        normal: DVec3::new(0.3, 1.0, 0.0),
+        condition: Condition::SLIP.with_friction(0.3),
+    };
+    let mut cube = thrown_cube(
+        Material::fixed_corotated(2e4, 0.3),
+        DVec3::new(0.5, -1.0, 0.2),
+        Boundaries {
+            walls: DomainWalls::default(),
+            colliders: vec![slope],
+            surface: None,
+        },
+    );
+    cube.params.transfer = blend;
+    let mut sphere = nacc_sphere();
+    sphere.params.transfer = blend;
+    for gpu in gpus() {
+        for (name, scene, steps, bound) in [
+            ("cube", &cube, 150, 1e-3),
+            ("NACC sphere", &sphere, 120, 1e-2),
+        ] {
+            for path in paths(&gpu) {
+                let (worst, cpu, out) = compare(&gpu, path, scene, steps, 3);
+                let speed = cpu.v.iter().map(|v| v.length()).fold(0.0, f64::max);
+                let dv = cpu
+                    .v
+                    .iter()
+                    .zip(&out.v)
+                    .map(|(a, b)| (*a - *b).length())
+                    .fold(0.0, f64::max);
+                eprintln!(
+                    "{} ({path:?} P2G): {name}, FLIP 0.7, {steps} steps: GPU vs CPU max |Δx| = {worst:.2e} Δx, max |Δv| = {:.2e} of the top speed",
+                    gpu.describe(),
+                    dv / speed
+                );
+                assert!(worst < bound, "{name}: GPU and CPU differ by {worst} Δx");
+                assert!(
+                    dv / speed < bound * 10.0,
+                    "{name}: velocities differ by {dv}"
+                );
+            }
+        }
+    }
+}
+
 /// The node passes visit only the blocks of 4³ nodes that some particle's stencil reaches:
 /// the GPU's list after a step holds exactly the blocks counted here on the CPU from the
 /// particles' stencils at the start of that step, including blocks that stick out of a

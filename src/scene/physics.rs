@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::SceneError;
 use crate::sim::nacc::{m_from_friction_angle, Case3Variant, NaccParams};
-use crate::sim::{BoundaryKind, Condition, ElasticModel, Material};
+use crate::sim::{BoundaryKind, Condition, ElasticModel, Material, Transfer};
 
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.8]
@@ -45,6 +45,78 @@ pub struct SimulationSpec {
     /// Planar colliders (at most 8).
     #[serde(default)]
     pub colliders: Vec<ColliderSpec>,
+    /// How velocity moves between particles and grid: `"apic"` (the default) or a FLIP/PIC
+    /// blend `{"flip": f}`, f in [0, 1] (0: PIC; the official GaussianFluent release's
+    /// watermelon uses 0.7).
+    #[serde(default)]
+    pub transfer: TransferSpec,
+}
+
+/// `simulation.transfer`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(
+    untagged,
+    expecting = "`transfer`: \"apic\" or {\"flip\": f} with f in [0, 1]"
+)]
+pub enum TransferSpec {
+    #[default]
+    #[serde(with = "apic_name")]
+    #[schemars(with = "ApicName")]
+    Apic,
+    FlipPic(FlipPicSpec),
+}
+
+/// The name `"apic"`.
+#[derive(JsonSchema)]
+#[serde(rename_all = "snake_case")]
+#[allow(dead_code)]
+enum ApicName {
+    Apic,
+}
+
+/// `"apic"` as the unit variant of an untagged enum.
+mod apic_name {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str("apic")
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<(), D::Error> {
+        let name = String::deserialize(d)?;
+        if name == "apic" {
+            Ok(())
+        } else {
+            Err(serde::de::Error::custom("not \"apic\""))
+        }
+    }
+}
+
+/// A FLIP/PIC blend: the FLIP share of G2P's velocity.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FlipPicSpec {
+    pub flip: f64,
+}
+
+impl TransferSpec {
+    /// The step's transfer, validated.
+    pub fn build(&self, origin: &str) -> Result<Transfer, SceneError> {
+        match self {
+            TransferSpec::Apic => Ok(Transfer::Apic),
+            TransferSpec::FlipPic(FlipPicSpec { flip }) => {
+                if !(0.0..=1.0).contains(flip) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        "simulation.transfer.flip",
+                        flip,
+                        "a FLIP share in [0, 1] (0: PIC)",
+                    ));
+                }
+                Ok(Transfer::FlipPic { flip: *flip })
+            }
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]

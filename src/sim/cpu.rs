@@ -90,7 +90,7 @@ pub fn p2g(
         }
     }
 
-    let apic = transfer == Transfer::Apic;
+    let apic = transfer.apic();
     let items: Vec<P2gItem> = order
         .par_iter()
         .map(|&p| {
@@ -116,17 +116,19 @@ pub fn p2g(
     let nodes = grid.nodes().as_ivec3();
     let bci = bc.as_ivec3();
     let (start_ref, items_ref) = (&start, &items);
+    let carry = transfer.flip() > 0.0;
     grid.mass
         .par_iter_mut()
         .zip(grid.momentum.par_iter_mut())
+        .zip(grid.carried.par_iter_mut())
         .enumerate()
-        .for_each(|(idx, (m_out, p_out))| {
+        .for_each(|(idx, ((m_out, p_out), q_out))| {
             let node = IVec3::new(
                 (idx % nodes.x as usize) as i32,
                 ((idx / nodes.x as usize) % nodes.y as usize) as i32,
                 (idx / (nodes.x as usize * nodes.y as usize)) as i32,
             );
-            let (mut msum, mut psum) = (0.0, DVec3::ZERO);
+            let (mut msum, mut psum, mut qsum) = (0.0, DVec3::ZERO, DVec3::ZERO);
             for oz in 0..3 {
                 let bz = node.z - oz;
                 if bz < 0 || bz >= bci.z {
@@ -150,12 +152,16 @@ pub fn p2g(
                             let d = (off - it.fx) * dx;
                             msum += w * it.m;
                             psum += (it.mv + it.affine * d) * w;
+                            if carry {
+                                qsum += it.mv * w;
+                            }
                         }
                     }
                 }
             }
             *m_out = msum;
             *p_out = psum;
+            *q_out = qsum;
         });
     grid.cell_start = start;
     grid.order = order;
@@ -232,16 +238,31 @@ pub fn grid_update_at(
         });
 }
 
-/// G2P (docs/method.md §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ, F ← (I + Δt C) F,
-/// x += Δt v_p, then the material's plasticity. A particle whose stencil is off the grid
-/// moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged).
+/// G2P (docs/method.md §2 step 3): v_pic = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
+/// F ← (I + Δt C) F, x += Δt v_pic, then the material's plasticity. The particle's velocity
+/// is v_pic, or with a FLIP/PIC blend flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic, where
+/// Δv_i = v_i − q_i/m_i, q_i = Σ w m_p v_p ([`Grid::carried`]), is what the step's forces
+/// changed at node i. A particle whose stencil
+/// is off the grid moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged).
 pub fn g2p(
     particles: &mut Particles,
     grid: &Grid,
     materials: &[Material],
     dt: f64,
     gravity: DVec3,
+    transfer: Transfer,
 ) {
+    let flip = transfer.flip();
+    // Δv_i: the node's velocity after the grid update against the particles' own, before
+    // the stress, gravity and boundary conditions changed it.
+    let velocity_change = |i: usize| {
+        let m = grid.mass[i];
+        if m > 0.0 {
+            grid.velocity[i] - grid.carried[i] / m
+        } else {
+            DVec3::ZERO
+        }
+    };
     let dx = grid.dx;
     let inv_d = 4.0 / (dx * dx);
     let Particles {
@@ -270,6 +291,7 @@ pub fn g2p(
             };
             let base = st.base.as_uvec3();
             let mut vp = DVec3::ZERO;
+            let mut dv = DVec3::ZERO;
             let mut b = DMat3::ZERO;
             for oz in 0..3u32 {
                 for oy in 0..3u32 {
@@ -280,13 +302,20 @@ pub fn g2p(
                         let vi = grid.velocity[row + ox as usize];
                         let d = (DVec3::new(ox as f64, oy as f64, oz as f64) - st.fx) * dx;
                         vp += vi * w;
+                        if flip > 0.0 {
+                            dv += velocity_change(row + ox as usize) * w;
+                        }
                         b += DMat3::from_cols(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
                     }
                 }
             }
             let cp = b * inv_d;
             let f_trial = (DMat3::IDENTITY + cp * dt) * *f;
-            *v = vp;
+            *v = if flip > 0.0 {
+                (*v + dv) * flip + vp * (1.0 - flip)
+            } else {
+                vp
+            };
             *c = cp;
             *x += vp * dt;
             let (f_new, a_new) = materials[*mat as usize].plasticity(f_trial, *alpha);
@@ -318,7 +347,14 @@ pub fn step_at(
     let escaped = p2g(particles, grid, materials, params.dt, params.transfer);
     let (dt, g) = (params.dt, params.gravity);
     grid_update_at(grid, dt, g, &params.boundaries, kinematic, time);
-    g2p(particles, grid, materials, params.dt, params.gravity);
+    g2p(
+        particles,
+        grid,
+        materials,
+        params.dt,
+        params.gravity,
+        params.transfer,
+    );
     StepStats { escaped }
 }
 

@@ -80,9 +80,11 @@ impl P2gPath {
 
 /// Bytes of the atomic path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
 /// each); the gather path sums in registers and needs none (one placeholder node).
-fn sums_bytes(path: P2gPath, blocks: u32) -> u64 {
+fn sums_bytes(path: P2gPath, step: &GpuStep, blocks: u32) -> u64 {
+    // A FLIP/PIC blend sums the momentum without forces too: a second vec4 per node.
+    let per_node = if step.flip > 0.0 { 32 } else { 16 };
     match path {
-        P2gPath::Atomic => u64::from(blocks) * 64 * 16,
+        P2gPath::Atomic => u64::from(blocks) * 64 * per_node,
         P2gPath::Gather => 16,
     }
 }
@@ -162,6 +164,13 @@ fn init<T: Pod>(gpu: &GpuContext, label: &str, data: &[T], readable: bool) -> wg
             contents: &padded,
             usage,
         })
+}
+
+/// The grid's velocity changes for a pool of `blocks`: as large as the pool for a FLIP/PIC
+/// blend, one block (bound, never read) otherwise.
+fn velocity_change_texture(device: &wgpu::Device, step: &GpuStep, blocks: u32) -> GridTexture {
+    let blocks = if step.flip > 0.0 { blocks } else { 1 };
+    GridTexture::new(device, "sim grid velocity change", blocks)
 }
 
 fn zeroed(gpu: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
@@ -283,8 +292,9 @@ impl GpuSim {
             key_count: init(gpu, "sim key count", &[n], false),
             affine: zeroed(gpu, "sim affine", nn * 48),
             ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
-            grid: zeroed(gpu, "sim grid pool", sums_bytes(path, pool)),
-            grid_velocity: GridTexture::new(device, pool),
+            grid: zeroed(gpu, "sim grid pool", sums_bytes(path, &step, pool)),
+            grid_velocity: GridTexture::new(device, "sim grid velocity", pool),
+            grid_velocity_change: velocity_change_texture(device, &step, pool),
             block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
             block_slot: zeroed(gpu, "sim block slots", u64::from(blocks) * 4),
             surface: match &params.boundaries.surface {
@@ -474,6 +484,7 @@ impl GpuSim {
     pub fn grid_bytes(&self) -> u64 {
         self.buffers.grid.size()
             + self.buffers.grid_velocity.bytes()
+            + self.buffers.grid_velocity_change.bytes()
             + self.buffers.block_slot.size()
     }
 
@@ -483,8 +494,14 @@ impl GpuSim {
     pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
         let blocks = blocks.clamp(1, self.max_pool_blocks);
         self.consts.pool_blocks = blocks;
-        self.buffers.grid = zeroed(gpu, "sim grid pool", sums_bytes(self.path, blocks));
-        self.buffers.grid_velocity = GridTexture::new(&gpu.device, blocks);
+        self.buffers.grid = zeroed(
+            gpu,
+            "sim grid pool",
+            sums_bytes(self.path, &self.consts, blocks),
+        );
+        self.buffers.grid_velocity = GridTexture::new(&gpu.device, "sim grid velocity", blocks);
+        self.buffers.grid_velocity_change =
+            velocity_change_texture(&gpu.device, &self.consts, blocks);
         self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
@@ -624,6 +641,7 @@ impl GpuSim {
         .map(|buf| buf.size())
         .sum::<u64>()
             + b.grid_velocity.bytes()
+            + b.grid_velocity_change.bytes()
     }
 
     /// The watchdog (docs/method.md §2): particles that became non-finite, and particles that left the

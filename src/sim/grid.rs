@@ -23,6 +23,10 @@ pub struct Grid {
     pub cells: UVec3,
     pub mass: Vec<f64>,
     pub momentum: Vec<DVec3>,
+    /// Σ w_ip m_p v_p: the momentum the particles brought, without the step's stress and
+    /// affine terms; what a FLIP/PIC blend's G2P measures the grid's change against
+    /// (summed only for such a blend).
+    pub carried: Vec<DVec3>,
     pub velocity: Vec<DVec3>,
     /// Counting-sort scratch of the sorted gather (reused between steps).
     pub(crate) cell_start: Vec<u32>,
@@ -51,6 +55,7 @@ impl Grid {
             cells,
             mass: vec![0.0; count],
             momentum: vec![DVec3::ZERO; count],
+            carried: vec![DVec3::ZERO; count],
             velocity: vec![DVec3::ZERO; count],
             cell_start: Vec::new(),
             order: Vec::new(),

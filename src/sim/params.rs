@@ -4,14 +4,34 @@ use glam::DVec3;
 
 use super::boundary::Boundaries;
 
-/// Particle-to-grid transfer of the affine field.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// How velocity moves between particles and grid (docs/method.md §2, *Transfers*).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Transfer {
-    /// APIC/MLS (docs/method.md §2's default): m_p C_p is transferred.
+    /// APIC/MLS (the default): P2G carries the affine momentum m_p C_p, G2P takes the
+    /// interpolated velocity.
     #[default]
     Apic,
-    /// PIC: C_p still drives the F update but is not transferred (for comparison only).
-    Pic,
+    /// A FLIP/PIC blend: P2G carries no affine momentum (C_p still drives the F update),
+    /// and G2P sets v_p ← flip · (v_p + Σ w Δv_i) + (1 − flip) · Σ w v_i, with
+    /// Δv_i = v_i − Σ w m_p v_p / m_i what the step's forces (stress, gravity, boundary
+    /// conditions) changed at node i; positions move with the interpolated velocity.
+    /// `flip` in [0, 1]; 0 is PIC.
+    FlipPic { flip: f64 },
+}
+
+impl Transfer {
+    /// Whether P2G carries the affine momentum m_p C_p.
+    pub fn apic(self) -> bool {
+        self == Transfer::Apic
+    }
+
+    /// The FLIP share of the G2P velocity (0 for APIC and PIC).
+    pub fn flip(self) -> f64 {
+        match self {
+            Transfer::Apic => 0.0,
+            Transfer::FlipPic { flip } => flip,
+        }
+    }
 }
 
 /// Parameters of one step.

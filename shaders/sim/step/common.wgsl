@@ -83,6 +83,12 @@ struct SimStep {
     num_kinematic: u32,
     // blocks the grid pool holds (sparse grid: common.wgsl, node_index)
     pool_blocks: u32,
+    // the FLIP share of G2P's velocity (0: APIC or PIC; the grid's velocity change is then
+    // neither written nor read)
+    flip: f32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
     surface: SurfaceCondition,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
@@ -117,6 +123,7 @@ struct StepConsts {
     num_particles: u32,
     pool_blocks: u32,
     apic: u32,
+    flip: f32,
     // step.materials[0], read for all invocations at once; particle_material
     material0: SimMaterial,
 }
@@ -134,6 +141,7 @@ fn read_consts() {
     consts.num_particles = step.num_particles;
     consts.pool_blocks = step.pool_blocks;
     consts.apic = step.apic;
+    consts.flip = step.flip;
     consts.material0 = step.materials[0];
 }
 

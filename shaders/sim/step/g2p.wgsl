@@ -1,6 +1,8 @@
-// G2P (per particle, docs/method.md §2 step 3): v_p = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
-// F ← (I + Δt C) F, x += Δt v_p, then the material's plasticity (NACC return mapping,
-// docs/method.md §4). A particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
+// G2P (per particle, docs/method.md §2 step 3): v_pic = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
+// F ← (I + Δt C) F, x += Δt v_pic, then the material's plasticity (NACC return mapping,
+// docs/method.md §4). The particle keeps v_pic, or with a FLIP/PIC blend
+// flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic. A particle whose stencil is off the grid
+// moves ballistically. Mirrors `cpu::g2p`.
 
 @group(0) @binding(1) var<storage, read_write> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> v_volume: array<vec4<f32>>;
@@ -10,6 +12,8 @@
 @group(0) @binding(6) var<storage, read> material: array<u32>;
 // The grid's nodes after the grid update: velocity xyz, mass w (common.wgsl, grid_texel).
 @group(0) @binding(7) var grid_velocity: texture_2d<f32>;
+// What the step's forces changed at each node, Δv_i (read only with a FLIP/PIC blend).
+@group(0) @binding(16) var grid_velocity_change: texture_2d<f32>;
 // The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
 // F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
@@ -55,19 +59,29 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let s = st.s;
     let base = vec3<u32>(s.base);
     let blocks = stencil_blocks(base);
+    let flip = consts.flip;
     var vp = vec3<f32>(0.0);
+    var dv = vec3<f32>(0.0);
     var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
-        let vi = textureLoad(grid_velocity, grid_texel(stencil_node(blocks, off)), 0).xyz;
+        let texel = grid_texel(stencil_node(blocks, off));
+        let vi = textureLoad(grid_velocity, texel, 0).xyz;
         let w = bspline_weight(s, off);
         let d = bspline_offset(s, off, consts.dx);
         vp += w * vi;
         b += mat3x3<f32>(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
+        if flip > 0.0 {
+            dv += w * textureLoad(grid_velocity_change, texel, 0).xyz;
+        }
     }
     let c = b * (4.0 / (consts.dx * consts.dx));
     let f_trial = (SIM_IDENTITY3 + c * consts.dt) * deformation[p];
-    v_volume[p] = vec4<f32>(vp, vv.w);
+    var v_new = vp;
+    if flip > 0.0 {
+        v_new = flip * (vv.xyz + dv) + (1.0 - flip) * vp;
+    }
+    v_volume[p] = vec4<f32>(v_new, vv.w);
     affine_velocity[p] = c;
     x_mass[p] = vec4<f32>(xm.xyz + vp * consts.dt, xm.w);
     let m = particle_material(material[p]);
@@ -78,7 +92,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if NEXT_AFFINE {
         affine[p] = affine_term(m, f_new, c, xm.w, vv.w);
     }
-    if !(sim_is_finite3(vp) && sim_is_finite_mat3(f_new)) {
+    if !(sim_is_finite3(v_new) && sim_is_finite_mat3(f_new)) {
         count_failure(0u);
     }
 }

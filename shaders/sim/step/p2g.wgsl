@@ -12,6 +12,8 @@
 @group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
 // xyz: velocity after the grid update, w: mass (common.wgsl, grid_texel)
 @group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
+// xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
+@group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
 // The blocks some particle's stencil reaches (compact_blocks.wgsl); nodes elsewhere are left
 // as they are: no particle reads them.
 @group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
@@ -33,8 +35,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let idx = bn.index;
     let node = vec3<i32>(bn.node);
     let bc = vec3<i32>(consts.cells) - 1;
+    let carry = consts.flip > 0.0;
     var msum = 0.0;
     var psum = vec3<f32>(0.0);
+    // Σ w m_p v_p, without the stress and affine terms (FLIP/PIC blends only)
+    var qsum = vec3<f32>(0.0);
     for (var oz = 0; oz < 3; oz++) {
         for (var oy = 0; oy < 3; oy++) {
             for (var ox = 0; ox < 3; ox++) {
@@ -51,11 +56,20 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
                     let s = bspline_stencil(xm.xyz - consts.lo, consts.inv_dx);
                     let w = bspline_weight(s, off);
                     let d = bspline_offset(s, off, consts.dx);
+                    let mv = xm.w * v_volume[p].xyz;
                     msum += w * xm.w;
-                    psum += w * (xm.w * v_volume[p].xyz + affine[p] * d);
+                    psum += w * (mv + affine[p] * d);
+                    if carry {
+                        qsum += w * mv;
+                    }
                 }
             }
         }
     }
-    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(node_velocity(vec3<u32>(node), psum, msum), msum));
+    let v = node_velocity(vec3<u32>(node), psum, msum);
+    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, msum));
+    if carry {
+        let dv = select(vec3<f32>(0.0), v - qsum / msum, msum > 0.0);
+        textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv, 0.0));
+    }
 }

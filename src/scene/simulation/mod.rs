@@ -20,7 +20,7 @@ use super::{BuildReport, Scene, SceneError};
 use crate::derive::Binding;
 use crate::render::Splats;
 use crate::sim::{
-    cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams, Transfer,
+    cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams,
 };
 
 /// Everything the simulate-and-render loop needs.
@@ -159,7 +159,7 @@ pub fn prepare(
         dt,
         gravity: vec3(spec.gravity),
         boundaries,
-        transfer: Transfer::Apic,
+        transfer: spec.transfer.build(o)?,
     };
     Ok(Some(SimulationSetup {
         splats: out.splats,

@@ -41,6 +41,7 @@ impl G2p {
                 ("alpha", Buffer(b.window(&b.alpha, i, SCALAR))),
                 ("material", Buffer(b.window(&b.material, i, SCALAR))),
                 ("grid_velocity", b.grid_velocity.binding()),
+                ("grid_velocity_change", b.grid_velocity_change.binding()),
                 ("flags", b.flags.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
                 ("affine", Buffer(b.window(&b.affine, i, MAT3))),

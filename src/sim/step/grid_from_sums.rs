@@ -24,6 +24,7 @@ impl GridFromSums {
                 ("step", b.step.as_entire_binding()),
                 ("grid", b.grid.as_entire_binding()),
                 ("grid_velocity", b.grid_velocity.binding()),
+                ("grid_velocity_change", b.grid_velocity_change.binding()),
                 ("active_blocks", b.active_blocks.as_entire_binding()),
                 ("block_args", b.block_args.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),

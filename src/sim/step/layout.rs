@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3};
 use crate::gpu::GpuError;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use crate::sim::wgsl::NaccMaterialGpu;
-use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams, Transfer};
+use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams};
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
@@ -138,6 +138,9 @@ pub struct GpuStep {
     pub num_kinematic: u32,
     /// Blocks the grid pool holds (set by `GpuSim`).
     pub pool_blocks: u32,
+    /// The FLIP share of G2P's velocity (`Transfer::flip`; 0: none).
+    pub flip: f32,
+    pub _pad: [u32; 3],
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
@@ -218,9 +221,11 @@ impl GpuStep {
             nodes: grid.nodes().to_array(),
             num_colliders: colliders.len() as u32,
             band: params.boundaries.walls.band,
-            apic: u32::from(params.transfer == Transfer::Apic),
+            apic: u32::from(params.transfer.apic()),
             num_kinematic: 0,
             pool_blocks: 0,
+            flip: params.transfer.flip() as f32,
+            _pad: [0; 3],
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -288,6 +293,7 @@ mod tests {
                 apic,
                 num_kinematic,
                 pool_blocks,
+                flip,
                 surface,
                 walls,
                 colliders,

@@ -88,6 +88,9 @@ pub(crate) struct StepBuffers {
     pub grid: wgpu::Buffer,
     /// The grid's velocities after the grid update, for G2P (common.wgsl, grid_texel).
     pub grid_velocity: GridTexture,
+    /// What the grid update changed at each node, for a FLIP/PIC blend's G2P (one block's
+    /// worth, unused, otherwise).
+    pub grid_velocity_change: GridTexture,
     pub block_flags: wgpu::Buffer,
     /// Block → pool slot, one u32 per block of the domain.
     pub block_slot: wgpu::Buffer,
@@ -103,9 +106,9 @@ pub(crate) struct StepBuffers {
 /// Nodes per row of the grid texture (`GRID_TEXELS_PER_ROW` in common.wgsl): 64 blocks.
 pub(crate) const GRID_TEXELS_PER_ROW: u32 = 4096;
 
-/// The grid's velocities as an rgba32float texture, node `n` at texel
+/// A vec4 per node of the grid pool as an rgba32float texture, node `n` at texel
 /// (n mod [`GRID_TEXELS_PER_ROW`], n / [`GRID_TEXELS_PER_ROW`]); written by the grid
-/// update, read by G2P.
+/// update, read by G2P (the velocities, and a FLIP blend's velocity changes).
 pub(crate) struct GridTexture {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
@@ -118,10 +121,10 @@ impl GridTexture {
     }
 
     /// A texture for a pool of `blocks` blocks (at most [`Self::max_blocks`]).
-    pub fn new(device: &wgpu::Device, blocks: u32) -> GridTexture {
+    pub fn new(device: &wgpu::Device, label: &str, blocks: u32) -> GridTexture {
         let rows = (u64::from(blocks) * 64).div_ceil(u64::from(GRID_TEXELS_PER_ROW));
         let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("sim grid velocity"),
+            label: Some(label),
             size: wgpu::Extent3d {
                 width: GRID_TEXELS_PER_ROW,
                 height: rows.max(1) as u32,
