@@ -3,6 +3,20 @@
 
 use wgpu::naga;
 
+/// `source` parsed and validated by naga (every check, no optional capability); a failure
+/// panics with naga's report on the source.
+pub fn validated_module(source: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    module
+}
+
 /// Size and (name, offset) of every member of the WGSL struct `name` in `source`.
 pub fn naga_struct(source: &str, name: &str) -> (u32, Vec<(String, u32)>) {
     let module = naga::front::wgsl::parse_str(source).expect("WGSL parses");

@@ -102,15 +102,7 @@ mod tests {
             vec![MATH, SVD, ELASTICITY],
             vec![MATH, SVD, NACC],
         ] {
-            let src = parts.join("\n");
-            let module = naga::front::wgsl::parse_str(&src)
-                .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-            naga::valid::Validator::new(
-                naga::valid::ValidationFlags::all(),
-                naga::valid::Capabilities::empty(),
-            )
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+            crate::gpu::layout_check::validated_module(&parts.join("\n"));
         }
         let src = library();
         let module = naga::front::wgsl::parse_str(&src).expect("WGSL parses");

@@ -185,14 +185,7 @@ mod tests {
     #[test]
     fn wgsl_constants_are_the_codes_the_gpu_record_carries() {
         let src = format!("{}\n{}", super::super::wgsl::library(), wgsl());
-        let module = naga::front::wgsl::parse_str(&src)
-            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
-        naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::empty(),
-        )
-        .validate(&module)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+        let module = crate::gpu::layout_check::validated_module(&src);
         let mut seen = std::collections::HashSet::new();
         let elastic = ElasticModel::ALL
             .iter()
