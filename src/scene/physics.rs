@@ -723,3 +723,27 @@ pub struct SphereRegion {
 pub(super) fn vec3(v: [f64; 3]) -> DVec3 {
     DVec3::from_array(v)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `transfer` reads and writes back as written, and its values become the step's.
+    #[test]
+    fn transfer_round_trips_and_builds() {
+        for (text, want) in [
+            (r#""apic""#, Transfer::Apic),
+            (r#"{"flip":0.7}"#, Transfer::FlipPic { flip: 0.7 }),
+            (r#"{"flip":0.0}"#, Transfer::FlipPic { flip: 0.0 }),
+        ] {
+            let spec: TransferSpec = serde_json::from_str(text).unwrap();
+            assert_eq!(serde_json::to_string(&spec).unwrap(), text);
+            assert_eq!(spec.build("t.json").unwrap(), want);
+        }
+        for bad in [r#""pic""#, r#"{"flip":0.7,"k":1}"#, "0.7"] {
+            assert!(serde_json::from_str::<TransferSpec>(bad).is_err(), "{bad}");
+        }
+        let over: TransferSpec = serde_json::from_str(r#"{"flip":1.5}"#).unwrap();
+        assert!(over.build("t.json").is_err());
+    }
+}
