@@ -79,9 +79,10 @@ impl P2gPath {
 }
 
 /// Bytes of the atomic path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
-/// each); the gather path sums in registers and needs none (one placeholder node).
+/// each, 32 for a FLIP/PIC blend); the gather path sums in registers and needs none (one
+/// placeholder node).
 fn sums_bytes(path: P2gPath, step: &GpuStep, blocks: u32) -> u64 {
-    // A FLIP/PIC blend sums the momentum without forces too: a second vec4 per node.
+    // A FLIP/PIC blend also sums the momentum without forces: a second vec4 per node.
     let per_node = if step.flip > 0.0 { 32 } else { 16 };
     match path {
         P2gPath::Atomic => u64::from(blocks) * 64 * per_node,
