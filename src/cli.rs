@@ -40,6 +40,18 @@ pub(crate) enum Command {
         #[arg(long, value_name = "FILE.png")]
         preview: Option<PathBuf>,
     },
+    /// Count the pieces of particle point clouds (PLY with x, y, z: `render
+    /// --export-particles` files or another solver's): particles closer than the link
+    /// distance are linked, linked particles form a fragment, and a fragment of at least 1%
+    /// of the particles is a piece. One line per file and object.
+    Fragments {
+        /// The particle files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Link distance (default: the file's `comment dx`, the grid spacing).
+        #[arg(long)]
+        link: Option<f64>,
+    },
     /// List the GPU adapters, their optional features and limits.
     Info,
     /// Print the JSON Schema of scene files.
@@ -208,6 +220,12 @@ pub(crate) struct RenderArgs {
     /// magnitude smaller than PLY, opened by web viewers): DIR/frame_00000.spz, …
     #[arg(long, value_name = "DIR")]
     pub(crate) export_spz: Option<PathBuf>,
+    /// Also write each rendered frame's MPM particles (position, velocity, mass, volume,
+    /// NACC hardening state log Jᴾ, material, object) as a binary PLY point cloud:
+    /// DIR/frame_00000.ply, … (docs/formats.md, "Particle files"; `splatter fragments`
+    /// counts their pieces).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export_particles: Option<PathBuf>,
     /// Quick look at a capture (any splat format) without a scene file: stood upright
     /// and orbited, framing its robust bounds.
     #[arg(long, conflicts_with = "scene")]
@@ -234,7 +252,7 @@ pub(crate) struct RenderArgs {
     /// Render-only: take each frame's Gaussians from DIR/frame_NNNNN.ply (as written by
     /// --export-ply) instead of building and simulating the scene; the scene gives the
     /// camera path and output settings. For splitting frame ranges over machines.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply", "export_spz"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply", "export_spz", "export_particles"])]
     pub(crate) from_states: Option<PathBuf>,
     /// After rendering, assemble the frames into a video with ffmpeg (which must be on
     /// the PATH; checked before rendering starts).
@@ -270,6 +288,7 @@ impl RenderArgs {
             quality: self.quality,
             export_ply: self.export_ply,
             export_spz: self.export_spz,
+            export_particles: self.export_particles,
             resume: self.resume,
             deterministic: self.deterministic,
             checkpoint_every: self.checkpoint_every,

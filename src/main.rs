@@ -42,6 +42,7 @@ fn run(cli: Cli) -> Result<()> {
             support_height,
             preview,
         }) => inspect(cli.backend, &file, support_height, preview.as_deref()),
+        Some(Command::Fragments { files, link }) => fragments(&files, link),
         Some(Command::Info) => {
             print!("{}", splatter::gpu::info_report(cli.backend));
             Ok(())
@@ -254,4 +255,59 @@ fn fail_hook_frame() -> Result<Option<u32>> {
         })?)),
         Err(_) => Ok(None),
     }
+}
+
+/// `splatter fragments`: the pieces of each file's particles, per object.
+fn fragments(files: &[std::path::PathBuf], link: Option<f64>) -> Result<()> {
+    use splatter::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
+    if let Some(l) = link {
+        anyhow::ensure!(
+            l.is_finite() && l > 0.0,
+            "--link {l}: expected a positive distance"
+        );
+    }
+    for path in files {
+        let file = splatter::output::particles::read(path)?;
+        let Some(link) = link.or(file.dx) else {
+            anyhow::bail!(
+                "{}: no `comment dx` in its header to take the link distance from; give --link",
+                path.display()
+            );
+        };
+        let mut objects: Vec<i64> = file.object.clone().unwrap_or_default();
+        objects.sort_unstable();
+        objects.dedup();
+        if objects.is_empty() {
+            objects.push(-1);
+        }
+        for object in objects {
+            let member = |i: usize| file.object.as_ref().is_none_or(|o| o[i] == object);
+            let members: Vec<usize> = (0..file.x.len()).filter(|&i| member(i)).collect();
+            let points: Vec<glam::DVec3> = members.iter().map(|&i| file.x[i]).collect();
+            let s = FragmentSummary::new(&sizes_of(&fragment_ids(&points, link)), PIECE_SHARE);
+            let damaged = file.log_jp.as_ref().map(|a| {
+                let n = members.iter().filter(|&&i| a[i] >= 0.0).count();
+                format!(
+                    ", {:.1}% damaged (log Jp ≥ 0)",
+                    100.0 * n as f64 / members.len().max(1) as f64
+                )
+            });
+            let which = match object {
+                -1 => String::new(),
+                o => format!(" object {o}"),
+            };
+            println!(
+                "{}{which}: {} particles, {} piece(s) with ≥ {:.0}% (largest {:.1}%), {} particles of debris, {} fragments in all (link {link}){}",
+                path.display(),
+                s.particles,
+                s.pieces,
+                PIECE_SHARE * 100.0,
+                s.largest_share * 100.0,
+                s.debris,
+                s.fragments,
+                damaged.unwrap_or_default()
+            );
+        }
+    }
+    Ok(())
 }

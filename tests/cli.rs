@@ -840,6 +840,8 @@ fn simulated_cube_falls(transfer: &str) {
             "1..3",
             "--export-ply",
             "states",
+            "--export-particles",
+            "particles",
         ],
     );
     expect_success(&out);
@@ -864,6 +866,65 @@ fn simulated_cube_falls(transfer: &str) {
         (drop - 0.067).abs() < 0.01,
         "{transfer}: the cube's centre should fall 0.067 between frames 1 and 2, fell {drop}"
     );
+    // The particle files: the same free fall, of the particles' centre of mass.
+    let particles = |frame: &str| {
+        let path = dir.path().join("particles").join(frame);
+        splatter::output::particles::read(&path).unwrap()
+    };
+    let (a, b) = (particles("frame_00001.ply"), particles("frame_00002.ply"));
+    assert_eq!(a.x.len(), b.x.len());
+    assert!(!a.x.is_empty() && a.dx.is_some_and(|dx| dx > 0.0));
+    let centre_z = |f: &splatter::output::particles::ParticleFile| {
+        f.x.iter().map(|p| p.z).sum::<f64>() / f.x.len() as f64
+    };
+    let drop = centre_z(&a) - centre_z(&b);
+    assert!(
+        (drop - 0.067).abs() < 1e-3,
+        "{transfer}: the particles' centre should fall 0.067 between frames 1 and 2, fell {drop}"
+    );
+}
+
+/// `splatter fragments` on a point cloud of known pieces: two blocks of 10×10×10 points
+/// (spacing 0.01) 0.05 apart and one stray point far away count as 2 pieces, 1 particle of
+/// debris and 3 fragments with the link 0.015; with a link of 0.1 they are one block and
+/// the stray point.
+#[test]
+fn fragments_counts_the_pieces_of_a_point_cloud() {
+    let dir = workdir();
+    let mut ply = String::new();
+    let mut points = Vec::new();
+    for block in [0.0, 0.14] {
+        for i in 0..1000 {
+            let (x, y, z) = (i % 10, (i / 10) % 10, i / 100);
+            points.push([block + x as f64 * 0.01, y as f64 * 0.01, z as f64 * 0.01]);
+        }
+    }
+    points.push([5.0, 5.0, 5.0]);
+    ply.push_str(&format!(
+        "ply\nformat ascii 1.0\ncomment dx 0.015\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
+        points.len()
+    ));
+    for p in &points {
+        ply.push_str(&format!("{} {} {}\n", p[0], p[1], p[2]));
+    }
+    write(dir.path(), "points.ply", &ply);
+    let out = splatter(dir.path(), &["fragments", "points.ply"]);
+    expect_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("2001 particles, 2 piece(s)")
+            && text.contains("1 particles of debris, 3 fragments"),
+        "{text}"
+    );
+    let out = splatter(dir.path(), &["fragments", "points.ply", "--link", "0.1"]);
+    expect_success(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("1 piece(s)") && text.contains("2 fragments"),
+        "{text}"
+    );
+    let line = expect_error(&splatter(dir.path(), &["fragments", "missing.ply"]));
+    assert_mentions(&line, &["missing.ply"]);
 }
 
 /// `simulation.transfer` out of range or misspelt: one error line naming the field and

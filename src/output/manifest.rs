@@ -59,6 +59,8 @@ pub struct Settings {
     pub export_ply: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export_spz: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub export_particles: Option<PathBuf>,
 }
 
 /// One rendered frame's timings (wall clock on the rendering thread, milliseconds).

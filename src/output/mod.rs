@@ -4,6 +4,7 @@
 
 pub mod export;
 pub mod manifest;
+pub mod particles;
 mod progress;
 pub mod text;
 pub mod video;

@@ -72,6 +72,8 @@ pub struct RunOptions {
     pub export_ply: Option<PathBuf>,
     /// Also write each frame's Gaussians as SPZ (version 3) into this directory.
     pub export_spz: Option<PathBuf>,
+    /// Also write each frame's MPM particles as a PLY point cloud into this directory.
+    pub export_particles: Option<PathBuf>,
     /// Skip frames already written and restart the simulation from the checkpoint.
     pub resume: bool,
     /// Sum P2G in a fixed order: bit-identical frames on the same adapter.
@@ -109,6 +111,7 @@ impl Default for RunOptions {
             quality: Quality::Standard,
             export_ply: None,
             export_spz: None,
+            export_particles: None,
             resume: false,
             deterministic: false,
             checkpoint_every: 10,
@@ -275,6 +278,11 @@ impl Job {
                 .opts
                 .exports()
                 .all(|(d, format)| crate::output::export::frame_file(d, frame, format).is_file())
+            && self
+                .opts
+                .export_particles
+                .as_deref()
+                .is_none_or(|d| crate::output::particles::frame_particles_path(d, frame).is_file())
     }
 
     /// The manifest of this run; with `--resume`, the frame timings of an earlier run of

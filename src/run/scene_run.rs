@@ -44,12 +44,18 @@ pub(super) fn execute(
         };
         bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
     }
+    if opts.export_particles.is_some() && setup.is_none() {
+        bail!("--export-particles writes the particles of simulated objects, and this scene simulates none (no object has `physics`)");
+    }
     let hash = checkpoint::scene_hash(scene, &splats, setup.as_ref());
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
     create_dir(&dir, "output directory")?;
     for (d, format) in opts.exports() {
         create_dir(d, format.directory_name())?;
+    }
+    if let Some(d) = &opts.export_particles {
+        create_dir(d, "particle export directory")?;
     }
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
@@ -151,6 +157,7 @@ pub(super) fn execute(
         from_states: None,
         export_ply: opts.export_ply.clone(),
         export_spz: opts.export_spz.clone(),
+        export_particles: opts.export_particles.clone(),
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
@@ -422,9 +429,16 @@ impl Frames<'_> {
                 continue;
             }
             if let Some(sim) = sim.as_deref_mut() {
-                if let Some(log) = &mut self.fragment_log {
+                let wants_state =
+                    self.fragment_log.is_some() || self.job.opts.export_particles.is_some();
+                if wants_state {
                     let state = sim.sim.read_particles(self.gpu, &sim.setup.particles)?;
-                    log.record(frame, &state, sim.setup, &self.job.scene)?;
+                    if let Some(log) = &mut self.fragment_log {
+                        log.record(frame, &state, sim.setup, &self.job.scene)?;
+                    }
+                    if let Some(dir) = &self.job.opts.export_particles {
+                        crate::output::particles::export_frame(dir, frame, &state, sim.setup)?;
+                    }
                 }
                 sim.derive(
                     self.gpu,

@@ -1,0 +1,168 @@
+//! `--export-particles`: each rendered frame's MPM particles as a binary PLY point cloud,
+//! so that the physics can be inspected, plotted or compared with another solver, and
+//! `splatter fragments` can count the pieces of any solver's particles the way
+//! `--fragments` counts ours.
+//!
+//! Format (docs/formats.md, *Particle files*): `binary_little_endian` PLY, one `vertex`
+//! per particle with `float x y z vx vy vz mass volume log_jp` and `int material object`;
+//! a header comment `dx D` gives the grid spacing, the default link distance of the
+//! fragment counter. `log_jp` is the NACC hardening state α = log Jᴾ (α ≥ 0: the
+//! particle's cohesion is gone); NaN for materials without one.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use glam::DVec3;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+
+use crate::output::write_atomically;
+use crate::scene::simulation::SimulationSetup;
+use crate::sim::{Material, Particles};
+
+/// The float properties of a particle record, in file order.
+const FLOATS: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "mass", "volume", "log_jp"];
+/// The integer properties, after the floats.
+const INTS: [&str; 2] = ["material", "object"];
+
+/// `DIR/frame_00042.ply`.
+pub fn frame_particles_path(dir: &Path, frame: u32) -> PathBuf {
+    dir.join(format!("frame_{frame:05}.ply"))
+}
+
+/// The header of a file of `n` particles on a grid of spacing `dx`.
+fn header(n: usize, dx: f64, comment: &str) -> String {
+    let mut h = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment splatter MPM particles: {comment}\ncomment dx {dx:e}\nelement vertex {n}\n"
+    );
+    for name in FLOATS {
+        h.push_str(&format!("property float {name}\n"));
+    }
+    for name in INTS {
+        h.push_str(&format!("property int {name}\n"));
+    }
+    h.push_str("end_header\n");
+    h
+}
+
+/// Encode the particles of a run: every body's particles, with the body's object index.
+pub fn encode(state: &Particles, setup: &SimulationSetup, comment: &str) -> Vec<u8> {
+    let mut bytes = header(state.len(), setup.grid.dx, comment).into_bytes();
+    bytes.reserve(state.len() * (FLOATS.len() + INTS.len()) * 4);
+    for body in &setup.bodies {
+        for i in body.particles.clone() {
+            let hardening = matches!(
+                setup.materials[state.material[i] as usize],
+                Material::Nacc { .. }
+            );
+            let log_jp = if hardening { state.alpha[i] } else { f64::NAN };
+            let (x, v) = (state.x[i], state.v[i]);
+            for value in [x.x, x.y, x.z, v.x, v.y, v.z].into_iter().chain([
+                state.mass[i],
+                state.volume0[i],
+                log_jp,
+            ]) {
+                bytes.extend_from_slice(&(value as f32).to_le_bytes());
+            }
+            bytes.extend_from_slice(&(state.material[i] as i32).to_le_bytes());
+            bytes.extend_from_slice(&(body.object as i32).to_le_bytes());
+        }
+    }
+    bytes
+}
+
+/// Write frame `frame`'s particles to `DIR/frame_NNNNN.ply`, atomically.
+pub fn export_frame(
+    dir: &Path,
+    frame: u32,
+    state: &Particles,
+    setup: &SimulationSetup,
+) -> Result<PathBuf> {
+    let path = frame_particles_path(dir, frame);
+    let bytes = encode(state, setup, &format!("frame {frame}"));
+    write_atomically(&path, &bytes)?;
+    Ok(path)
+}
+
+/// Particles read back from a particle file (ours or any PLY point cloud with `x y z`).
+#[derive(Clone, Debug, Default)]
+pub struct ParticleFile {
+    pub x: Vec<DVec3>,
+    /// α = log Jᴾ per particle, when the file has `log_jp`.
+    pub log_jp: Option<Vec<f64>>,
+    /// The object each particle belongs to, when the file has `object`.
+    pub object: Option<Vec<i64>>,
+    /// The `comment dx D` of the header.
+    pub dx: Option<f64>,
+}
+
+fn scalar(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => v as f64,
+        Property::UChar(v) => v as f64,
+        Property::Short(v) => v as f64,
+        Property::UShort(v) => v as f64,
+        Property::Int(v) => v as f64,
+        Property::UInt(v) => v as f64,
+        Property::Float(v) => v as f64,
+        Property::Double(v) => v,
+        _ => return None,
+    })
+}
+
+/// Read a PLY point cloud's `vertex` positions, and `log_jp`, `object` and the `dx`
+/// comment where present.
+pub fn read(path: &Path) -> Result<ParticleFile> {
+    let file =
+        std::fs::File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let mut reader = std::io::BufReader::new(file);
+    let parser = Parser::<DefaultElement>::new();
+    let ply = parser
+        .read_ply(&mut reader)
+        .map_err(|e| anyhow::anyhow!("{}: not a readable PLY file: {e}", path.display()))?;
+    let dx = ply.header.comments.iter().find_map(|c| {
+        c.strip_prefix("dx ")
+            .and_then(|v| v.trim().parse::<f64>().ok())
+    });
+    let Some(vertices) = ply.payload.get("vertex") else {
+        bail!("{}: no `vertex` element", path.display());
+    };
+    let column = |name: &str| -> Result<Option<Vec<f64>>> {
+        if !vertices.first().is_some_and(|v| v.contains_key(name)) {
+            return Ok(None);
+        }
+        vertices
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                v.get(name).and_then(scalar).with_context(|| {
+                    format!(
+                        "{}: vertex {i}: property `{name}` missing or not a scalar",
+                        path.display()
+                    )
+                })
+            })
+            .collect::<Result<Vec<f64>>>()
+            .map(Some)
+    };
+    let mut axes = Vec::new();
+    for name in ["x", "y", "z"] {
+        match column(name)? {
+            Some(c) => axes.push(c),
+            None => bail!(
+                "{}: the vertices have no `{name}` property (a point cloud needs x, y, z)",
+                path.display()
+            ),
+        }
+    }
+    let x = (0..vertices.len())
+        .map(|i| DVec3::new(axes[0][i], axes[1][i], axes[2][i]))
+        .collect();
+    let object = column("object")?.map(|c| c.into_iter().map(|v| v as i64).collect());
+    Ok(ParticleFile {
+        x,
+        log_jp: column("log_jp")?,
+        object,
+        dx,
+    })
+}
