@@ -260,6 +260,16 @@ fn fragments_of_a_scene_that_simulates_nothing() {
 }
 
 #[test]
+fn particles_of_a_scene_that_simulates_nothing() {
+    let line = render_scene_error(
+        "still.json",
+        &tiny_scene(),
+        &["--export-particles", "particles"],
+    );
+    assert_mentions(&line, &["--export-particles", "physics"]);
+}
+
+#[test]
 fn zero_transform_scale() {
     let line = render_scene_error(
         "zero_scale.json",

@@ -3,7 +3,7 @@
 solver on the CPU, on our watermelon's particles (docs/accuracy.md, "The release's solver
 as a peer"). Not run by CI.
 
-  python3 benches/peers/gaussianfluent_watermelon.py scene N OUT.json
+  python3 benches/peers/gaussianfluent_watermelon.py scene N OUT.json [elastic]
       Our scene of the release's setup at n_grid N: the fruit scaled so its largest extent
       is 1 and centred at (1, 1, 1) in a [0, 2]^3 domain, dx = 2/N, the release's material
       (one NACC, E 2000, nu 0.38, xi 3, beta 1, M 1.85, log Jp -0.04; our seed region beta
@@ -23,7 +23,12 @@ as a peer"). Not run by CI.
       deviatoric stress back onto the yield surface at constant pressure, so the elastic J
       does not change, but still updates log Jp by log(J / J_fake) with J_fake from the
       point where the line from the ellipse's centre through the trial stress meets it;
-      `no_case3_hardening` drops that update (the tips still harden).
+      `no_case3_hardening` drops that update (the tips still harden). `elastic`: the
+      release's `jelly` (fixed corotated, no plasticity) with the same E and nu, against
+      our scene with `fixed_corotated` (`scene N OUT.json elastic`). `unweighted_force`
+      (and `elastic_unweighted_force`): the release's FLIP P2G adds each node's stress
+      impulse times the node's weight, w_ip dt f_ip, where its own APIC P2G (and MLS-MPM)
+      adds dt f_ip; this variant removes the extra w_ip.
 
 The release's floor: its sticky surface collider at z = 0 zeroes nodes with z < 0, of which
 the grid has none, so the fruit lands on the bounding box's bottom padding (nodes below
@@ -83,10 +88,13 @@ def nacc(beta):
             "xi": XI, "M": 1.85, "return_mapping": "continuous"}
 
 
-def scene(n_grid, out):
+def scene(n_grid, out, variant="as_released"):
     dx = 2.0 / n_grid
     s = 1.0 / FRUIT_EXTENT
     body = nacc(BETA)
+    seeds = nacc(SEED_BETA)
+    if variant == "elastic":
+        body = seeds = {"model": "fixed_corotated", "E": E, "nu": NU, "density": RHO}
     # Frames as the release's driver writes them: one per 0.03 s.
     doc = {
         "description": "The GaussianFluent release's watermelon drop in its own frame, at n_grid %d "
@@ -107,7 +115,7 @@ def scene(n_grid, out):
             "physics": {"material": body, "fill": True, "velocity": [0, 0, V0],
                         "regions": [{"label": "rind", "material": body},
                                     {"label": "white_rind", "material": body},
-                                    {"label": "seeds", "material": nacc(SEED_BETA)}]}}],
+                                    {"label": "seeds", "material": seeds}]}}],
     }
     with open(out, "w") as f:
         json.dump(doc, f, indent=1)
@@ -119,9 +127,16 @@ CASE3_HARDENING = "if hardeningOn > 0.5 and p0 > 1e-4 and p_trial < p0 - 1e-4"
 # 0/0 makes the particle NaN (then the next P2G indexes the grid out of bounds: the
 # segfault). Particles on a lattice, as a fill makes them, hit this; so the copy guards
 # the division, which changes nothing where it was defined.
+# Its FLIP P2G adds the stress impulse scaled by the node's weight (w_ip dt f_ip; its
+# APIC P2G adds dt f_ip): variant `unweighted_force` removes that factor.
+WEIGHTED_FORCE = "v_out_add = weight * dt * elastic_force"
 OLD_V = "old_v = old_v + state.grid_v_in[ix, iy, iz] * weight  / state.grid_m[ix, iy, iz]"
 OLD_V_GUARDED = ("old_v = old_v + state.grid_v_in[ix, iy, iz] * weight / "
                  "wp.max(state.grid_m[ix, iy, iz], 1.0e-30)")
+
+
+VARIANTS = ("as_released", "no_case3_hardening", "unweighted_force", "elastic",
+            "elastic_unweighted_force")
 
 
 def patched_solver(snapshot, variant):
@@ -138,11 +153,14 @@ def patched_solver(snapshot, variant):
     text = open(mpm).read()
     assert text.count(OLD_V) == 1, "the release's g2p_flip line is not where expected"
     text = text.replace(OLD_V, OLD_V_GUARDED)
+    if variant in ("unweighted_force", "elastic_unweighted_force"):
+        assert text.count(WEIGHTED_FORCE) == 1, "the release's FLIP P2G force line is not where expected"
+        text = text.replace(WEIGHTED_FORCE, "v_out_add = dt * elastic_force")
     if variant == "no_case3_hardening":
         assert text.count(CASE3_HARDENING) == 1, "the release's case-3 hardening line is not where expected"
         text = text.replace(CASE3_HARDENING, "if False")
-    elif variant != "as_released":
-        sys.exit("unknown variant %r: as_released or no_case3_hardening" % variant)
+    elif variant not in VARIANTS:
+        sys.exit("unknown variant %r: one of %s" % (variant, ", ".join(VARIANTS)))
     open(mpm, "w").write(text)
     stubs = os.path.join(tmp, "stubs")
     os.makedirs(stubs)
@@ -179,7 +197,8 @@ def run(snapshot, particles, n_grid, frames, out, variant="as_released"):
     sim.mpm_state.particle_vol = wp.from_numpy(vol, dtype=float, device=dev)
     # As the driver's load_initial_data_from_torch: F starts at the identity.
     wp.launch(kernel=set_mat33_to_identity, dim=n, inputs=[sim.mpm_state.particle_F_trial], device=dev)
-    sim.set_parameters_dict({"material": "watermelon", "E": E, "nu": NU, "density": RHO,
+    material = "jelly" if variant.startswith("elastic") else "watermelon"
+    sim.set_parameters_dict({"material": material, "E": E, "nu": NU, "density": RHO,
                              "beta": BETA, "xi": XI, "hardening": 1, "friction_angle": PHI,
                              "g": [0.0, 0.0, GRAVITY], "n_grid": n_grid, "grid_lim": grid_lim},
                             device=dev)
@@ -225,8 +244,8 @@ def run(snapshot, particles, n_grid, frames, out, variant="as_released"):
 
 def main():
     a = sys.argv[1:]
-    if len(a) == 3 and a[0] == "scene":
-        scene(int(a[1]), a[2])
+    if len(a) in (3, 4) and a[0] == "scene":
+        scene(int(a[1]), a[2], *a[3:])
     elif len(a) in (6, 7) and a[0] == "run":
         run(a[1], a[2], int(a[3]), int(a[4]), a[5], *a[6:])
     else:

@@ -37,15 +37,17 @@ pub(super) fn execute(
         check_grid_fits(gpu, scene)?;
     }
     let setup = scene::simulation::prepare(scene, splats.clone(), &report)?;
-    if opts.fragments && setup.is_none() {
+    if setup.is_none() {
         let name = match &opts.input {
             super::Input::Scene(Some(p)) => p.display().to_string(),
             _ => "the default scene".into(),
         };
-        bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
-    }
-    if opts.export_particles.is_some() && setup.is_none() {
-        bail!("--export-particles writes the particles of simulated objects, and this scene simulates none (no object has `physics`)");
+        if opts.fragments {
+            bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
+        }
+        if opts.export_particles.is_some() {
+            bail!("--export-particles writes the particles of simulated objects, and {name} simulates none (no object has `physics`)");
+        }
     }
     let hash = checkpoint::scene_hash(scene, &splats, setup.as_ref());
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
