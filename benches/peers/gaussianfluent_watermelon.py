@@ -18,22 +18,32 @@ as a peer"). Not run by CI.
       (gs_simulation_watermelon.py: dt = 0.6 dx / c, 0.03 s frames, p2g2p with flip 0.7,
       a bounding box and the sticky plane at z = 0). Writes OUT_DIR/frame_NNNNN.ply in our
       particle format; count its pieces with `splatter fragments OUT_DIR/frame_*.ply`.
-      VARIANT `as_released` (default) or `no_case3_hardening`: the one experiment made on
-      the peer's own code (in the temporary copy): its return mapping scales the
-      deviatoric stress back onto the yield surface at constant pressure, so the elastic J
-      does not change, but still updates log Jp by log(J / J_fake) with J_fake from the
-      point where the line from the ellipse's centre through the trial stress meets it;
-      `no_case3_hardening` drops that update (the tips still harden). `elastic`: the
-      release's `jelly` (fixed corotated, no plasticity) with the same E and nu, against
-      our scene with `fixed_corotated` (`scene N OUT.json elastic`). `unweighted_force`
-      (and `elastic_unweighted_force`): the release's FLIP P2G adds each node's stress
-      impulse times the node's weight, w_ip dt f_ip, where its own APIC P2G (and MLS-MPM)
-      adds dt f_ip; this variant removes the extra w_ip.
+      VARIANT: one-line edits of the temporary copy, to find what decides the result:
+        as_released         (default) as released, but for the guarded division below
+        no_case3_hardening  its return mapping scales the deviatoric stress back onto the
+                            yield surface at constant pressure (the elastic J does not
+                            change) but still updates log Jp by log(J / J_fake), J_fake
+                            from where the line from the ellipse's centre through the
+                            trial stress meets it; this drops that update (the tips still
+                            harden)
+        unweighted_force    its FLIP P2G adds each node's stress impulse times the node's
+                            weight, w_ip dt f_ip, where its own APIC P2G (and MLS-MPM)
+                            adds dt f_ip; this removes the extra w_ip
+        elastic             its `jelly` (fixed corotated, no plasticity) with the same E
+                            and nu, against our scene's `scene N OUT.json elastic`
+        elastic_unweighted_force  both of the last two
 
 The release's floor: its sticky surface collider at z = 0 zeroes nodes with z < 0, of which
 the grid has none, so the fruit lands on the bounding box's bottom padding (nodes below
 3 dx lose their downward velocity and keep their tangential one): a frictionless,
 separating floor at about 2-3 dx. Our scene uses a separating ground without friction.
+
+The guarded division: the release's FLIP G2P divides each node's momentum by its mass; a
+particle exactly half a cell from a node no other particle reaches makes that 0/0, the
+particle NaN and the next P2G index the grid out of range (a segfault in warp's release
+mode; WARP_MODE=debug reports it). A lattice fill hits it, so every variant guards that
+division, which changes nothing where it was defined, and the run stops with a message if
+a particle still leaves the grid.
 
 Needs numpy and warp-lang 1.x (pip); no CUDA. torch and h5py, which the release imports at
 module level but this path does not use, are replaced by empty stand-ins.
