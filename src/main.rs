@@ -259,7 +259,7 @@ fn fail_hook_frame() -> Result<Option<u32>> {
 
 /// `splatter fragments`: the pieces of each file's particles, per object.
 fn fragments(files: &[std::path::PathBuf], link: Option<f64>) -> Result<()> {
-    use splatter::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
+    use splatter::fragments::PIECE_SHARE;
     if let Some(l) = link {
         anyhow::ensure!(
             l.is_finite() && l > 0.0,
@@ -274,30 +274,15 @@ fn fragments(files: &[std::path::PathBuf], link: Option<f64>) -> Result<()> {
                 path.display()
             );
         };
-        let mut objects: Vec<i64> = file.object.clone().unwrap_or_default();
-        objects.sort_unstable();
-        objects.dedup();
-        if objects.is_empty() {
-            objects.push(-1);
-        }
-        for object in objects {
-            let member = |i: usize| file.object.as_ref().is_none_or(|o| o[i] == object);
-            let members: Vec<usize> = (0..file.x.len()).filter(|&i| member(i)).collect();
-            let points: Vec<glam::DVec3> = members.iter().map(|&i| file.x[i]).collect();
-            let s = FragmentSummary::new(&sizes_of(&fragment_ids(&points, link)), PIECE_SHARE);
-            let damaged = file.log_jp.as_ref().map(|a| {
-                let n = members.iter().filter(|&&i| a[i] >= 0.0).count();
-                format!(
-                    ", {:.1}% damaged (log Jp ≥ 0)",
-                    100.0 * n as f64 / members.len().max(1) as f64
-                )
-            });
-            let which = match object {
-                -1 => String::new(),
-                o => format!(" object {o}"),
-            };
+        for p in file.pieces(link) {
+            let s = &p.summary;
+            let which = p.object.map(|o| format!(" object {o}")).unwrap_or_default();
+            let damaged = p
+                .damaged_share
+                .map(|d| format!(", {:.1}% damaged (log Jp ≥ 0)", 100.0 * d))
+                .unwrap_or_default();
             println!(
-                "{}{which}: {} particles, {} piece(s) with ≥ {:.0}% (largest {:.1}%), {} particles of debris, {} fragments in all (link {link}){}",
+                "{}{which}: {} particles, {} piece(s) with ≥ {:.0}% (largest {:.1}%), {} particles of debris, {} fragments in all (link {link}){damaged}",
                 path.display(),
                 s.particles,
                 s.pieces,
@@ -305,7 +290,6 @@ fn fragments(files: &[std::path::PathBuf], link: Option<f64>) -> Result<()> {
                 s.largest_share * 100.0,
                 s.debris,
                 s.fragments,
-                damaged.unwrap_or_default()
             );
         }
     }

@@ -16,18 +16,20 @@ use glam::DVec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
+use crate::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
+use crate::output::export::frame_ply_path;
 use crate::output::write_atomically;
 use crate::scene::simulation::SimulationSetup;
-use crate::sim::{Material, Particles};
+use crate::sim::Particles;
 
 /// The float properties of a particle record, in file order.
 const FLOATS: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "mass", "volume", "log_jp"];
 /// The integer properties, after the floats.
 const INTS: [&str; 2] = ["material", "object"];
 
-/// `DIR/frame_00042.ply`.
+/// `DIR/frame_00042.ply`, named like the Gaussians' `--export-ply` files.
 pub fn frame_particles_path(dir: &Path, frame: u32) -> PathBuf {
-    dir.join(format!("frame_{frame:05}.ply"))
+    frame_ply_path(dir, frame)
 }
 
 /// The header of a file of `n` particles on a grid of spacing `dx`.
@@ -51,10 +53,7 @@ pub fn encode(state: &Particles, setup: &SimulationSetup, comment: &str) -> Vec<
     bytes.reserve(state.len() * (FLOATS.len() + INTS.len()) * 4);
     for body in &setup.bodies {
         for i in body.particles.clone() {
-            let hardening = matches!(
-                setup.materials[state.material[i] as usize],
-                Material::Nacc { .. }
-            );
+            let hardening = setup.materials[state.material[i] as usize].has_hardening_state();
             let log_jp = if hardening { state.alpha[i] } else { f64::NAN };
             let (x, v) = (state.x[i], state.v[i]);
             for value in [x.x, x.y, x.z, v.x, v.y, v.z].into_iter().chain([
@@ -165,4 +164,47 @@ pub fn read(path: &Path) -> Result<ParticleFile> {
         object,
         dx,
     })
+}
+
+/// The pieces of one object's particles in a [`ParticleFile`].
+#[derive(Clone, Debug)]
+pub struct ObjectPieces {
+    /// The `object` index; `None` when the file has no `object` property.
+    pub object: Option<i64>,
+    pub summary: FragmentSummary,
+    /// Share of the object's particles with log Jᴾ ≥ 0, when the file has `log_jp`.
+    pub damaged_share: Option<f64>,
+}
+
+impl ParticleFile {
+    /// The pieces of each object's particles (of all of them without `object`), linked
+    /// at `link` as `--fragments` links ours, in object order.
+    pub fn pieces(&self, link: f64) -> Vec<ObjectPieces> {
+        let mut objects: Vec<Option<i64>> = match &self.object {
+            Some(o) => o.iter().copied().map(Some).collect(),
+            None => vec![None],
+        };
+        objects.sort_unstable();
+        objects.dedup();
+        objects
+            .into_iter()
+            .map(|object| {
+                let members: Vec<usize> = (0..self.x.len())
+                    .filter(|&i| self.object.as_ref().is_none_or(|o| Some(o[i]) == object))
+                    .collect();
+                let points: Vec<DVec3> = members.iter().map(|&i| self.x[i]).collect();
+                let summary =
+                    FragmentSummary::new(&sizes_of(&fragment_ids(&points, link)), PIECE_SHARE);
+                let damaged_share = self.log_jp.as_ref().map(|a| {
+                    let n = members.iter().filter(|&&i| a[i] >= 0.0).count();
+                    n as f64 / members.len().max(1) as f64
+                });
+                ObjectPieces {
+                    object,
+                    summary,
+                    damaged_share,
+                }
+            })
+            .collect()
+    }
 }

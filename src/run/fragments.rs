@@ -15,7 +15,7 @@ use crate::render::splats::mat3_from_sym3;
 use crate::scene::simulation::{Body, SimulationSetup};
 use crate::scene::Scene;
 use crate::sim::svd::symmetric_eigen;
-use crate::sim::{Material, Particles};
+use crate::sim::Particles;
 
 /// A CSV field: quoted (with doubled quotes) when it holds a comma, quote or line break.
 fn csv_field(s: &str) -> String {
@@ -175,10 +175,8 @@ impl FragmentLog {
                 .particles
                 .clone()
                 .filter(|&i| {
-                    matches!(
-                        s.materials[state.material[i] as usize],
-                        Material::Nacc { .. }
-                    ) && state.alpha[i] >= 0.0
+                    s.materials[state.material[i] as usize].has_hardening_state()
+                        && state.alpha[i] >= 0.0
                 })
                 .count();
             let height = height_extent(&points);

@@ -65,6 +65,11 @@ impl Material {
         }
     }
 
+    /// Whether the material carries a hardening state α (whose α ≥ 0 counts as damaged).
+    pub fn has_hardening_state(&self) -> bool {
+        self.plastic_model() != PlasticModel::None
+    }
+
     /// P-wave modulus λ + 2μ (CFL sound speed c = sqrt((λ + 2μ)/ρ)).
     pub fn p_wave_modulus(&self) -> f64 {
         self.lame().p_wave_modulus()
