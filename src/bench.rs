@@ -725,6 +725,7 @@ impl SimCase {
                 surface: None,
             },
             transfer: Transfer::Apic,
+            separation: Default::default(),
         };
         SimCase {
             particles,

@@ -585,6 +585,7 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
         gravity: glam::DVec3::ZERO,
         boundaries: Boundaries::default(),
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     for gpu in gpus() {
         let sim = GpuSim::new(&gpu, &particles, &grid, &materials, &params).unwrap();

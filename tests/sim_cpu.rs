@@ -18,6 +18,7 @@ fn params(dt: f64, gravity: DVec3, boundaries: Boundaries) -> StepParams {
         gravity,
         boundaries,
         transfer: Transfer::Apic,
+        separation: Default::default(),
     }
 }
 
@@ -128,7 +129,7 @@ fn p2g_conserves_mass_momentum_and_angular_momentum() {
         p.f[q] = DMat3::IDENTITY + DMat3::from_cols(rv(), rv(), rv()) * 0.2;
     }
     let dt = 1e-3;
-    cpu::p2g(&p, &mut g, &mats, dt, Transfer::Apic);
+    cpu::p2g(&p, &mut g, &mats, dt, Transfer::Apic, Default::default());
     let origin = DVec3::splat(0.5);
     let sum_m: f64 = p.mass.iter().map(|m| m.abs()).sum();
     let sum_p: f64 = (0..p.len()).map(|q| p.mass[q] * p.v[q].length()).sum();

@@ -70,6 +70,7 @@ fn deform_and_derive_lit(
         gravity: DVec3::ZERO,
         boundaries: Boundaries::default(),
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     let sim = GpuSim::new(
         gpu,
@@ -224,6 +225,7 @@ fn jelly_cube_is_simulated_derived_and_rendered_on_the_gpu() {
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     let sim = GpuSim::new(&gpu, &particles, &grid, &[material], &params).unwrap();
     let mut renderer = GpuRenderer::new(&gpu);

@@ -96,6 +96,7 @@ fn params(dt: f64, boundaries: Boundaries) -> StepParams {
         gravity: DVec3::new(0.0, -G, 0.0),
         boundaries,
         transfer: Transfer::Apic,
+        separation: Default::default(),
     }
 }
 

@@ -23,6 +23,7 @@ fn params(dt: f64, gravity: DVec3, walls: DomainWalls) -> StepParams {
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     }
 }
 

@@ -35,6 +35,7 @@ fn fruit() -> (Particles, Grid, Vec<Material>, StepParams) {
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     (p, grid, vec![material], params)
 }

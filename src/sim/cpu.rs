@@ -21,33 +21,57 @@ use rayon::prelude::*;
 
 use super::boundary::{Boundaries, PlaneCollider};
 use super::bspline::Stencil;
-use super::grid::{Grid, NO_CELL};
+use super::grid::{FarField, Grid, NO_CELL};
 use super::kinematic::{KinematicCollider, RigidPose};
 use super::material::Material;
 use super::params::{StepParams, StepStats, Transfer};
 use super::particles::Particles;
+use super::separation::{contact, partition, Separation};
 
 /// Per-particle P2G data, in sorted order.
 struct P2gItem {
     w: [DVec3; 3],
+    dw: [DVec3; 3],
     fx: DVec3,
     m: f64,
     mv: DVec3,
     affine: DMat3,
+    /// Stencil nodes that hold the particle in their far field (`sim::separation`).
+    far: u32,
+}
+
+/// What P2G sums at one node for one field.
+#[derive(Clone, Copy, Default)]
+struct NodeSum {
+    m: f64,
+    p: DVec3,
+    /// Σ w m v ([`Grid::carried`]), for a FLIP/PIC blend.
+    q: DVec3,
+    /// Σ m ∇w, for a two-field contact normal.
+    grad: DVec3,
 }
 
 /// P2G (docs/method.md §2 step 1) into `grid.mass` and `grid.momentum`, by the sorted gather of the
-/// module docs. Returns how many particles were left out (stencil off the grid).
+/// module docs; with two-field `separation` also into `grid.far`, each particle into the
+/// field each node holds it in (`sim::separation::partition`). Returns how many particles
+/// were left out (stencil off the grid).
 pub fn p2g(
     particles: &Particles,
     grid: &mut Grid,
     materials: &[Material],
     dt: f64,
     transfer: Transfer,
+    separation: Separation,
 ) -> usize {
     let n = particles.len();
     let dx = grid.dx;
     let inv_d = 4.0 / (dx * dx);
+    let two_field = separation != Separation::None;
+    let sides = if two_field {
+        partition(particles, grid, materials)
+    } else {
+        Vec::new()
+    };
     // Base cells: base ∈ [0, cells − 2] per axis.
     let bc = grid.cells - 1;
     let ncell = (bc.x as usize) * (bc.y as usize) * (bc.z as usize);
@@ -105,10 +129,12 @@ pub fn p2g(
             }
             P2gItem {
                 w: st.w,
+                dw: st.dw,
                 fx: st.fx,
                 m,
                 mv: particles.v[p] * m,
                 affine,
+                far: if two_field { sides[p] } else { 0 },
             }
         })
         .collect();
@@ -117,52 +143,82 @@ pub fn p2g(
     let bci = bc.as_ivec3();
     let (start_ref, items_ref) = (&start, &items);
     let carry = transfer.flip() > 0.0;
-    grid.mass
-        .par_iter_mut()
-        .zip(grid.momentum.par_iter_mut())
-        .zip(grid.carried.par_iter_mut())
-        .enumerate()
-        .for_each(|(idx, ((m_out, p_out), q_out))| {
-            let node = IVec3::new(
-                (idx % nodes.x as usize) as i32,
-                ((idx / nodes.x as usize) % nodes.y as usize) as i32,
-                (idx / (nodes.x as usize * nodes.y as usize)) as i32,
-            );
-            let (mut msum, mut psum, mut qsum) = (0.0, DVec3::ZERO, DVec3::ZERO);
-            for oz in 0..3 {
-                let bz = node.z - oz;
-                if bz < 0 || bz >= bci.z {
+    // The near and far fields' sums at node `idx`.
+    let gather = |idx: usize| -> [NodeSum; 2] {
+        let node = IVec3::new(
+            idx as i32 % nodes.x,
+            (idx as i32 / nodes.x) % nodes.y,
+            idx as i32 / (nodes.x * nodes.y),
+        );
+        let mut sum = [NodeSum::default(); 2];
+        for oz in 0..3 {
+            let bz = node.z - oz;
+            if bz < 0 || bz >= bci.z {
+                continue;
+            }
+            for oy in 0..3 {
+                let by = node.y - oy;
+                if by < 0 || by >= bci.y {
                     continue;
                 }
-                for oy in 0..3 {
-                    let by = node.y - oy;
-                    if by < 0 || by >= bci.y {
+                for ox in 0..3 {
+                    let bx = node.x - ox;
+                    if bx < 0 || bx >= bci.x {
                         continue;
                     }
-                    for ox in 0..3 {
-                        let bx = node.x - ox;
-                        if bx < 0 || bx >= bci.x {
-                            continue;
+                    let cell = (bx + bci.x * (by + bci.y * bz)) as usize;
+                    let off = DVec3::new(ox as f64, oy as f64, oz as f64);
+                    let bit = ox + 3 * oy + 9 * oz;
+                    let (s, e) = (start_ref[cell] as usize, start_ref[cell + 1] as usize);
+                    for it in &items_ref[s..e] {
+                        let (a, b, c) = (ox as usize, oy as usize, oz as usize);
+                        let w = it.w[a].x * it.w[b].y * it.w[c].z;
+                        let d = (off - it.fx) * dx;
+                        let f = &mut sum[(it.far >> bit & 1) as usize];
+                        f.m += w * it.m;
+                        f.p += (it.mv + it.affine * d) * w;
+                        if carry {
+                            f.q += it.mv * w;
                         }
-                        let cell = (bx + bci.x * (by + bci.y * bz)) as usize;
-                        let off = DVec3::new(ox as f64, oy as f64, oz as f64);
-                        let (s, e) = (start_ref[cell] as usize, start_ref[cell + 1] as usize);
-                        for it in &items_ref[s..e] {
-                            let w = it.w[ox as usize].x * it.w[oy as usize].y * it.w[oz as usize].z;
-                            let d = (off - it.fx) * dx;
-                            msum += w * it.m;
-                            psum += (it.mv + it.affine * d) * w;
-                            if carry {
-                                qsum += it.mv * w;
-                            }
+                        if two_field {
+                            let dw = DVec3::new(
+                                it.dw[a].x * it.w[b].y * it.w[c].z,
+                                it.w[a].x * it.dw[b].y * it.w[c].z,
+                                it.w[a].x * it.w[b].y * it.dw[c].z,
+                            );
+                            // ∇ of the node's mass with respect to the node's position: the
+                            // stencil's dw is with respect to the particle's, so negated.
+                            f.grad -= dw * (it.m / dx);
                         }
                     }
                 }
             }
-            *m_out = msum;
-            *p_out = psum;
-            *q_out = qsum;
-        });
+        }
+        sum
+    };
+    if two_field {
+        let sums: Vec<[NodeSum; 2]> = (0..grid.node_count()).into_par_iter().map(gather).collect();
+        let far = &mut grid.far;
+        far.resize(sums.len());
+        for (i, [near_sum, far_sum]) in sums.into_iter().enumerate() {
+            (grid.mass[i], grid.momentum[i], grid.carried[i]) = (near_sum.m, near_sum.p, near_sum.q);
+            far.near_mass_gradient[i] = near_sum.grad;
+            (far.mass[i], far.momentum[i], far.carried[i]) = (far_sum.m, far_sum.p, far_sum.q);
+            far.mass_gradient[i] = far_sum.grad;
+        }
+        far.sides = sides;
+    } else {
+        grid.far = FarField::default();
+        grid.mass
+            .par_iter_mut()
+            .zip(grid.momentum.par_iter_mut())
+            .zip(grid.carried.par_iter_mut())
+            .enumerate()
+            .for_each(|(idx, ((m_out, p_out), q_out))| {
+                let [s, _] = gather(idx);
+                (*m_out, *p_out, *q_out) = (s.m, s.p, s.q);
+            });
+    }
     grid.cell_start = start;
     grid.order = order;
     escaped
@@ -197,44 +253,77 @@ pub fn grid_update_at(
         })
         .collect();
     let band = walls.band;
+    // The boundary conditions at node `i` (position `x`) on a velocity.
+    let constrain = |i: UVec3, x: DVec3, mut v: DVec3| {
+        for c in &colliders {
+            if (x - c.point).dot(c.normal) <= 0.0 {
+                v = c.condition.apply(v, c.normal);
+            }
+        }
+        for (k, pose) in kinematic.iter().zip(&poses) {
+            v = k.apply(pose, x, v);
+        }
+        if let Some(s) = &boundaries.surface {
+            v = s.apply(nodes.to_array(), i.to_array(), v);
+        }
+        for axis in 0..3 {
+            let e = DVec3::AXES[axis];
+            if i[axis] < band {
+                v = walls.faces[2 * axis].apply(v, e);
+            }
+            if i[axis] + band > cells[axis] {
+                v = walls.faces[2 * axis + 1].apply(v, -e);
+            }
+        }
+        v
+    };
+    let node_of = |idx: usize| {
+        let (nx, ny) = (nodes.x as usize, nodes.y as usize);
+        UVec3::new(
+            (idx % nx) as u32,
+            ((idx / nx) % ny) as u32,
+            (idx / (nx * ny)) as u32,
+        )
+    };
+    let trial = |m: f64, p: DVec3| p / m + gravity * dt;
+    if grid.far.mass.is_empty() {
+        grid.velocity
+            .par_iter_mut()
+            .zip(grid.mass.par_iter().zip(grid.momentum.par_iter()))
+            .enumerate()
+            .for_each(|(idx, (v_out, (&m, &p)))| {
+                *v_out = if m > 0.0 {
+                    let i = node_of(idx);
+                    constrain(i, lo + i.as_dvec3() * dx, trial(m, p))
+                } else {
+                    DVec3::ZERO
+                };
+            });
+        return;
+    }
+    // Two fields (sim::separation): both fields' trial velocities, their contact where a
+    // node holds both, then each field's boundary conditions.
+    let far = &mut grid.far;
+    let (mass, momentum) = (&grid.mass, &grid.momentum);
     grid.velocity
         .par_iter_mut()
-        .zip(grid.mass.par_iter().zip(grid.momentum.par_iter()))
+        .zip(far.velocity.par_iter_mut())
         .enumerate()
-        .for_each(|(idx, (v_out, (&m, &p)))| {
-            if m <= 0.0 {
-                *v_out = DVec3::ZERO;
-                return;
+        .for_each(|(idx, (v_near, v_far))| {
+            let (m_near, m_far) = (mass[idx], far.mass[idx]);
+            let mut near = (m_near > 0.0).then(|| trial(m_near, momentum[idx]));
+            let mut other = (m_far > 0.0).then(|| trial(m_far, far.momentum[idx]));
+            if let (Some(a), Some(b)) = (near, other) {
+                let (a, b) = contact(
+                    (m_near, a, far.near_mass_gradient[idx]),
+                    (m_far, b, far.mass_gradient[idx]),
+                );
+                (near, other) = (Some(a), Some(b));
             }
-            let (nx, ny) = (nodes.x as usize, nodes.y as usize);
-            let i = UVec3::new(
-                (idx % nx) as u32,
-                ((idx / nx) % ny) as u32,
-                (idx / (nx * ny)) as u32,
-            );
+            let i = node_of(idx);
             let x = lo + i.as_dvec3() * dx;
-            let mut v = p / m + gravity * dt;
-            for c in &colliders {
-                if (x - c.point).dot(c.normal) <= 0.0 {
-                    v = c.condition.apply(v, c.normal);
-                }
-            }
-            for (k, pose) in kinematic.iter().zip(&poses) {
-                v = k.apply(pose, x, v);
-            }
-            if let Some(s) = &boundaries.surface {
-                v = s.apply(nodes.to_array(), i.to_array(), v);
-            }
-            for axis in 0..3 {
-                let e = DVec3::AXES[axis];
-                if i[axis] < band {
-                    v = walls.faces[2 * axis].apply(v, e);
-                }
-                if i[axis] + band > cells[axis] {
-                    v = walls.faces[2 * axis + 1].apply(v, -e);
-                }
-            }
-            *v_out = v;
+            *v_near = near.map_or(DVec3::ZERO, |v| constrain(i, x, v));
+            *v_far = other.map_or(DVec3::ZERO, |v| constrain(i, x, v));
         });
 }
 
@@ -255,12 +344,25 @@ pub fn g2p(
     let flip = transfer.flip();
     // Δv_i: the node's velocity after the grid update against the particles' own, before
     // the stress, gravity and boundary conditions changed it.
-    let velocity_change = |i: usize| {
-        let m = grid.mass[i];
+    let velocity_change = |i: usize, far: bool| {
+        let (m, v, q) = if far {
+            (grid.far.mass[i], grid.far.velocity[i], grid.far.carried[i])
+        } else {
+            (grid.mass[i], grid.velocity[i], grid.carried[i])
+        };
         if m > 0.0 {
-            grid.velocity[i] - grid.carried[i] / m
+            v - q / m
         } else {
             DVec3::ZERO
+        }
+    };
+    // With two fields, each particle reads the field each node holds it in.
+    let sides = &grid.far.sides;
+    let velocity = |i: usize, far: bool| {
+        if far {
+            grid.far.velocity[i]
+        } else {
+            grid.velocity[i]
         }
     };
     let dx = grid.dx;
@@ -283,7 +385,9 @@ pub fn g2p(
         material.par_iter(),
     )
         .into_par_iter()
-        .for_each(|(x, v, f, c, alpha, mat)| {
+        .enumerate()
+        .for_each(|(p, (x, v, f, c, alpha, mat))| {
+            let far_sides = sides.get(p).copied().unwrap_or(0);
             let Some(st) = grid.stencil(*x) else {
                 *v += gravity * dt;
                 *x += *v * dt;
@@ -299,11 +403,12 @@ pub fn g2p(
                     let row = grid.index(base + UVec3::new(0, oy, oz));
                     for ox in 0..3u32 {
                         let w = st.w[ox as usize].x * wyz;
-                        let vi = grid.velocity[row + ox as usize];
+                        let far = far_sides >> (ox + 3 * oy + 9 * oz) & 1 == 1;
+                        let vi = velocity(row + ox as usize, far);
                         let d = (DVec3::new(ox as f64, oy as f64, oz as f64) - st.fx) * dx;
                         vp += vi * w;
                         if flip > 0.0 {
-                            dv += velocity_change(row + ox as usize) * w;
+                            dv += velocity_change(row + ox as usize, far) * w;
                         }
                         b += DMat3::from_cols(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
                     }
@@ -344,7 +449,14 @@ pub fn step_at(
     kinematic: &[KinematicCollider],
     time: f64,
 ) -> StepStats {
-    let escaped = p2g(particles, grid, materials, params.dt, params.transfer);
+    let escaped = p2g(
+        particles,
+        grid,
+        materials,
+        params.dt,
+        params.transfer,
+        params.separation,
+    );
     let (dt, g) = (params.dt, params.gravity);
     grid_update_at(grid, dt, g, &params.boundaries, kinematic, time);
     g2p(
@@ -552,6 +664,7 @@ mod tests {
                     surface: None,
                 },
                 transfer: Transfer::Apic,
+                separation: Default::default(),
             };
             for _ in 0..60 {
                 assert_eq!(step(&mut p, &mut g, &mats, &params).escaped, 0);
@@ -590,7 +703,7 @@ mod tests {
                 DMat3::from_cols(rand_vec(&mut r), rand_vec(&mut r), rand_vec(&mut r)) * 0.1;
         }
         let dt = 1e-3;
-        p2g(&p, &mut g, &mats, dt, Transfer::Apic);
+        p2g(&p, &mut g, &mats, dt, Transfer::Apic, Separation::None);
         let mut m_ref = vec![0.0; g.node_count()];
         let mut p_ref = vec![DVec3::ZERO; g.node_count()];
         for q in 0..p.len() {
@@ -613,6 +726,7 @@ mod tests {
             gravity: DVec3::new(0.0, -9.8, 0.0),
             boundaries: Boundaries::default(),
             transfer: Transfer::Apic,
+            separation: Default::default(),
         };
         let run = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new()

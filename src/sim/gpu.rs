@@ -237,6 +237,13 @@ impl GpuSim {
                 gpu.describe()
             ))));
         }
+        if params.separation != super::Separation::None {
+            return Err(SimSetupError::Gpu(GpuError::Failed(
+                "the GPU step has one velocity field per node; two-field separation \
+                 (sim::separation) runs on the CPU reference step only"
+                    .into(),
+            )));
+        }
         let texture_limit = gpu.limits.max_texture_dimension_2d;
         if texture_limit < GRID_TEXELS_PER_ROW {
             return Err(SimSetupError::Gpu(GpuError::Failed(format!(

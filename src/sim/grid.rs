@@ -28,9 +28,45 @@ pub struct Grid {
     /// (summed only for such a blend).
     pub carried: Vec<DVec3>,
     pub velocity: Vec<DVec3>,
+    /// The second velocity field of a two-field step (`sim::separation`); empty otherwise.
+    pub far: FarField,
     /// Counting-sort scratch of the sorted gather (reused between steps).
     pub(crate) cell_start: Vec<u32>,
     pub(crate) order: Vec<u32>,
+}
+
+/// A two-field step's far field (`sim::separation`): per node, the sums and velocity of the
+/// particles it holds on the far side of a crack (as [`Grid`]'s fields are the near
+/// side's), and both fields' mass gradients Σ m_p ∇w_ip, from which the contact normal
+/// comes. Sized by the first two-field P2G.
+#[derive(Clone, Debug, Default)]
+pub struct FarField {
+    pub mass: Vec<f64>,
+    pub momentum: Vec<DVec3>,
+    pub carried: Vec<DVec3>,
+    pub velocity: Vec<DVec3>,
+    pub mass_gradient: Vec<DVec3>,
+    /// The near field's mass gradient.
+    pub near_mass_gradient: Vec<DVec3>,
+    /// Per particle: the stencil nodes holding it in their far field (bit ox + 3·oy + 9·oz,
+    /// `separation::partition`), from the last P2G, for G2P.
+    pub sides: Vec<u32>,
+}
+
+impl FarField {
+    /// Sized for `nodes` nodes, sums cleared.
+    pub(crate) fn resize(&mut self, nodes: usize) {
+        self.mass.resize(nodes, 0.0);
+        for v in [
+            &mut self.momentum,
+            &mut self.carried,
+            &mut self.velocity,
+            &mut self.mass_gradient,
+            &mut self.near_mass_gradient,
+        ] {
+            v.resize(nodes, DVec3::ZERO);
+        }
+    }
 }
 
 /// Key of a particle outside the grid in the sort.
@@ -57,6 +93,7 @@ impl Grid {
             momentum: vec![DVec3::ZERO; count],
             carried: vec![DVec3::ZERO; count],
             velocity: vec![DVec3::ZERO; count],
+            far: FarField::default(),
             cell_start: Vec::new(),
             order: Vec::new(),
         }

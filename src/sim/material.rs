@@ -70,6 +70,21 @@ impl Material {
         self.plastic_model() != PlasticModel::None
     }
 
+    /// Damage d ∈ [0, 1] of a particle with hardening state `alpha` (what `sim::separation`
+    /// splits the grid by): for NACC the share of the initial cohesion −α₀ that α has lost,
+    /// clamp((α − α₀)/(−α₀), 0, 1), so 0 when fresh or compacted and 1 at α ≥ 0, where the
+    /// material holds no tension (1 everywhere for a material that starts without
+    /// cohesion, α₀ ≥ 0); 0 for the elastic models.
+    pub fn damage(&self, alpha: f64) -> f64 {
+        match self {
+            Material::Nacc { params, .. } if params.alpha0 < 0.0 => {
+                ((alpha - params.alpha0) / -params.alpha0).clamp(0.0, 1.0)
+            }
+            Material::Nacc { .. } => 1.0,
+            Material::Elastic { .. } => 0.0,
+        }
+    }
+
     /// P-wave modulus λ + 2μ (CFL sound speed c = sqrt((λ + 2μ)/ρ)).
     pub fn p_wave_modulus(&self) -> f64 {
         self.lame().p_wave_modulus()

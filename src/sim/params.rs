@@ -3,6 +3,7 @@
 use glam::DVec3;
 
 use super::boundary::Boundaries;
+use super::separation::Separation;
 
 /// How velocity moves between particles and grid (docs/method.md §2, *Transfers*).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -41,6 +42,7 @@ pub struct StepParams {
     pub gravity: DVec3,
     pub boundaries: Boundaries,
     pub transfer: Transfer,
+    pub separation: Separation,
 }
 
 /// What one step saw.

@@ -283,6 +283,7 @@ fn run_one(sweep: &str, value: f64, name: &str, variant: Case3Variant, quick: bo
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     let v_ref = (s.speed * s.speed + 2.0 * G * (center.y - GROUND)).sqrt();
     let e0 = energy(&p, &params);

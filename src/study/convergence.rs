@@ -170,6 +170,7 @@ fn params(dt: f64, walls: DomainWalls, colliders: Vec<PlaneCollider>) -> StepPar
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     }
 }
 
@@ -423,6 +424,7 @@ fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
             surface: None,
         },
         transfer: Transfer::Apic,
+        separation: Default::default(),
     };
     let gravity = |_| DVec3::new(0.0, -9.8, 0.0);
     let stats = simulate(

@@ -160,6 +160,7 @@ pub fn prepare(
         gravity: vec3(spec.gravity),
         boundaries,
         transfer: spec.transfer.build(o)?,
+        separation: Default::default(),
     };
     Ok(Some(SimulationSetup {
         splats: out.splats,
