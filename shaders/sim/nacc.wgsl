@@ -64,7 +64,8 @@ struct NaccMaterial {
     k: f32,
     // NACC_VARIANT_*
     variant: u32,
-    _pad: u32,
+    // initial hardening state α₀ (a particle's damage: step/separation.wgsl)
+    alpha0: f32,
 }
 
 // A (p, q) point and the table row that produced it.

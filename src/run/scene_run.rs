@@ -80,10 +80,10 @@ pub(super) fn execute(
     } else {
         Some(job.frames.start)
     };
-    let p2g = if opts.deterministic {
-        P2gPath::Gather
-    } else {
-        P2gPath::best(gpu)
+    let p2g = match &setup {
+        _ if opts.deterministic => P2gPath::Gather,
+        Some(s) => P2gPath::for_params(gpu, &s.params),
+        None => P2gPath::best(gpu),
     };
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
     on_event(Event::Note(format!(

@@ -201,7 +201,8 @@ pub fn p2g(
         let far = &mut grid.far;
         far.resize(sums.len());
         for (i, [near_sum, far_sum]) in sums.into_iter().enumerate() {
-            (grid.mass[i], grid.momentum[i], grid.carried[i]) = (near_sum.m, near_sum.p, near_sum.q);
+            (grid.mass[i], grid.momentum[i], grid.carried[i]) =
+                (near_sum.m, near_sum.p, near_sum.q);
             far.near_mass_gradient[i] = near_sum.grad;
             (far.mass[i], far.momentum[i], far.carried[i]) = (far_sum.m, far_sum.p, far_sum.q);
             far.mass_gradient[i] = far_sum.grad;

@@ -76,6 +76,16 @@ impl P2gPath {
             P2gPath::Gather
         }
     }
+
+    /// The best path that runs `params`: the gather for two-field separation (the atomic
+    /// path has one field), else [`Self::best`].
+    pub fn for_params(gpu: &GpuContext, params: &StepParams) -> P2gPath {
+        if params.separation != super::Separation::None {
+            P2gPath::Gather
+        } else {
+            Self::best(gpu)
+        }
+    }
 }
 
 /// Bytes of the atomic path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
@@ -174,14 +184,24 @@ fn velocity_change_texture(device: &wgpu::Device, step: &GpuStep, blocks: u32) -
     GridTexture::new(device, "sim grid velocity change", blocks)
 }
 
+/// Bytes of a per-node array of two-field separation for a pool of `blocks`: `per_node`
+/// bytes a node with separation, one node's worth (bound, never read) without.
+fn separation_bytes(step: &GpuStep, blocks: u32, per_node: u64) -> u64 {
+    if step.separation != 0 {
+        u64::from(blocks) * 64 * per_node
+    } else {
+        per_node
+    }
+}
+
 fn zeroed(gpu: &GpuContext, label: &str, bytes: u64) -> wgpu::Buffer {
     storage(&gpu.device, label, bytes, wgpu::BufferUsages::empty())
 }
 
 impl GpuSim {
     /// Upload `particles` for stepping on `grid` (its box, spacing and cell count) with
-    /// `materials` and `params` (Δt, gravity, boundaries, transfer), with the adapter's best
-    /// P2G path ([`P2gPath::best`]).
+    /// `materials` and `params` (Δt, gravity, boundaries, transfer, separation), with the
+    /// best P2G path for them ([`P2gPath::for_params`]).
     pub fn new(
         gpu: &GpuContext,
         particles: &Particles,
@@ -189,7 +209,8 @@ impl GpuSim {
         materials: &[Material],
         params: &StepParams,
     ) -> Result<GpuSim, SimSetupError> {
-        Self::with_path(gpu, particles, grid, materials, params, P2gPath::best(gpu))
+        let path = P2gPath::for_params(gpu, params);
+        Self::with_path(gpu, particles, grid, materials, params, path)
     }
 
     /// As [`new`](Self::new) with a chosen P2G path (`Atomic` needs float atomics).
@@ -237,10 +258,11 @@ impl GpuSim {
                 gpu.describe()
             ))));
         }
-        if params.separation != super::Separation::None {
+        let separation = params.separation != super::Separation::None;
+        if separation && path == P2gPath::Atomic {
             return Err(SimSetupError::Gpu(GpuError::Failed(
-                "the GPU step has one velocity field per node; two-field separation \
-                 (sim::separation) runs on the CPU reference step only"
+                "two-field separation (simulation.separation) runs on the gather P2G path; \
+                 the atomic path has one velocity field per node"
                     .into(),
             )));
         }
@@ -254,7 +276,7 @@ impl GpuSim {
         let n = particles.len() as u32;
         let step = GpuStep::new(grid, materials, params, n)?;
         let device = &gpu.device;
-        let passes = Passes::new(device, gpu.executor(), path == P2gPath::Atomic);
+        let passes = Passes::new(device, gpu.executor(), path == P2gPath::Atomic, separation);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]
@@ -320,6 +342,14 @@ impl GpuSim {
                 mapped_at_creation: false,
             }),
             flags: zeroed(gpu, "sim watchdog flags", 32),
+            damage: zeroed(gpu, "sim damage field", separation_bytes(&step, pool, 8)),
+            ridge: zeroed(gpu, "sim ridge", separation_bytes(&step, pool, 16)),
+            damage_gradient: zeroed(
+                gpu,
+                "sim damage gradient",
+                if separation { nn.max(1) * 16 } else { 16 },
+            ),
+            far_field: zeroed(gpu, "sim far field", separation_bytes(&step, pool, 32)),
             pages: PageRanges::new(device, "sim particle pages", pages),
         };
         let sort_bits = 32 - base_cells.leading_zeros();
@@ -490,10 +520,14 @@ impl GpuSim {
     /// Bytes of the grid itself: the pool (the atomic path's sums), the grid texture and
     /// the block → slot table.
     pub fn grid_bytes(&self) -> u64 {
-        self.buffers.grid.size()
-            + self.buffers.grid_velocity.bytes()
-            + self.buffers.grid_velocity_change.bytes()
-            + self.buffers.block_slot.size()
+        let b = &self.buffers;
+        b.grid.size()
+            + b.grid_velocity.bytes()
+            + b.grid_velocity_change.bytes()
+            + b.block_slot.size()
+            + b.damage.size()
+            + b.ridge.size()
+            + b.far_field.size()
     }
 
     /// Resize the grid pool to `blocks` blocks (at most every block of the domain, and at
@@ -511,6 +545,10 @@ impl GpuSim {
         self.buffers.grid_velocity_change =
             velocity_change_texture(&gpu.device, &self.consts, blocks);
         self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
+        let c = &self.consts;
+        self.buffers.damage = zeroed(gpu, "sim damage field", separation_bytes(c, blocks, 8));
+        self.buffers.ridge = zeroed(gpu, "sim ridge", separation_bytes(c, blocks, 16));
+        self.buffers.far_field = zeroed(gpu, "sim far field", separation_bytes(c, blocks, 32));
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
         self.binds = self.passes.bind(
@@ -644,6 +682,10 @@ impl GpuSim {
             &b.block_slot,
             &b.active_blocks,
             &b.block_args,
+            &b.damage,
+            &b.ridge,
+            &b.damage_gradient,
+            &b.far_field,
         ]
         .iter()
         .map(|buf| buf.size())

@@ -1,6 +1,6 @@
 //! Cracks that stay open: two velocity fields per grid node, split by the damage field's
 //! gradient (DFG partitioning; Homel & Herbold 2017, the separation CD-MPM uses,
-//! docs/method.md §5).
+//! docs/method.md §4.9).
 //!
 //! With one velocity per node, the material on both sides of a crack narrower than the
 //! stencil shares its nodes' velocities, so the two sides move together and the crack heals
@@ -36,7 +36,7 @@ use super::grid::Grid;
 use super::material::Material;
 use super::particles::Particles;
 
-/// How the grid keeps the pieces of a fractured body apart (docs/method.md §5).
+/// How the grid keeps the pieces of a fractured body apart (docs/method.md §4.9).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Separation {
     /// One velocity field per node (the plain MPM grid).
@@ -104,16 +104,16 @@ fn damage_field(particles: &Particles, grid: &Grid, damage: &[f64]) -> DamageFie
     let mut md = vec![0.0; grid.node_count()];
     let mut m = vec![0.0; grid.node_count()];
     let mut broken = vec![false; grid.node_count()];
-    for p in 0..particles.len() {
-        let Some(st) = grid.stencil(particles.x[p]) else {
+    for ((x, mass), &d) in particles.x.iter().zip(&particles.mass).zip(damage) {
+        let Some(st) = grid.stencil(*x) else {
             continue;
         };
         for off in stencil_offsets() {
             let i = node_index(grid, st.node(off));
-            let wm = st.weight(off) * particles.mass[p];
-            md[i] += wm * damage[p];
+            let wm = st.weight(off) * mass;
+            md[i] += wm * d;
             m[i] += wm;
-            broken[i] |= damage[p] >= BROKEN;
+            broken[i] |= d >= BROKEN;
         }
     }
     let d = md
@@ -144,35 +144,41 @@ fn node_gradients(
 ) -> Vec<DVec3> {
     let mut best = vec![(0.0f64, DVec3::ZERO); grid.node_count()];
     // Ascending particle order with a strict comparison: ties keep the lowest index.
-    for p in 0..particles.len() {
-        let Some(st) = grid.stencil(particles.x[p]) else {
+    for (x, &g) in particles.x.iter().zip(gradient) {
+        let Some(st) = grid.stencil(*x) else {
             continue;
         };
-        let norm2 = gradient[p].length_squared();
+        let norm2 = g.length_squared();
         for off in stencil_offsets() {
             let i = node_index(grid, st.node(off));
             if field.broken[i] && norm2 > best[i].0 {
-                best[i] = (norm2, gradient[p]);
+                best[i] = (norm2, g);
             }
         }
     }
     best.into_iter().map(|(_, g)| g).collect()
 }
 
+/// Below this length of n̂_near − n̂_far the contact normal is undefined (the two fields'
+/// mass gradients point the same way, or vanish); the WGSL twin uses the same bound.
+pub const NORMAL_MIN: f64 = 1e-6;
+
 /// One node's contact between its near field (mass `m_near`, velocity `v_near`, mass
 /// gradient `grad_near`) and its far field: returns the two velocities after it (module
 /// docs, step 5). The contact normal n points from the far field into the near one,
 /// n ∝ ∇m_near/|∇m_near| − ∇m_far/|∇m_far|; the fields approach when (v_near − v_far)·n < 0.
-/// Where n is undefined (both gradients vanish or are parallel), the fields move as one.
+/// Where n is undefined (|n̂_near − n̂_far| ≤ [`NORMAL_MIN`]), the fields move as one.
 pub fn contact(
     (m_near, v_near, grad_near): (f64, DVec3, DVec3),
     (m_far, v_far, grad_far): (f64, DVec3, DVec3),
 ) -> (DVec3, DVec3) {
     let v_cm = (v_near * m_near + v_far * m_far) / (m_near + m_far);
     let n = grad_near.normalize_or_zero() - grad_far.normalize_or_zero();
-    let Some(n) = n.try_normalize() else {
+    // Also catches a NaN length.
+    if n.length().partial_cmp(&NORMAL_MIN) != Some(std::cmp::Ordering::Greater) {
         return (v_cm, v_cm);
-    };
+    }
+    let n = n.normalize();
     if (v_near - v_far).dot(n) >= 0.0 {
         return (v_near, v_far);
     }

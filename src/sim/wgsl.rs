@@ -52,7 +52,8 @@ pub struct NaccMaterialGpu {
     pub k: f32,
     /// `VARIANT_*`.
     pub variant: u32,
-    pub _pad: u32,
+    /// Initial hardening state α₀ (a particle's damage, `Material::damage`).
+    pub alpha0: f32,
 }
 
 impl NaccMaterialGpu {
@@ -70,7 +71,7 @@ impl NaccMaterialGpu {
             m_slope: params.m_slope as f32,
             k: k as f32,
             variant: code,
-            _pad: 0,
+            alpha0: params.alpha0 as f32,
         }
     }
 }
@@ -125,6 +126,7 @@ mod tests {
             ("m_slope", std::mem::offset_of!(NaccMaterialGpu, m_slope)),
             ("k", std::mem::offset_of!(NaccMaterialGpu, k)),
             ("variant", std::mem::offset_of!(NaccMaterialGpu, variant)),
+            ("alpha0", std::mem::offset_of!(NaccMaterialGpu, alpha0)),
         ];
         for (m, (name, off)) in members.iter().zip(rust) {
             assert_eq!(m.name.as_deref(), Some(name));

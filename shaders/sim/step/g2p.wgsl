@@ -24,6 +24,13 @@
 // gather path's prepare runs every step for the sort keys and computes it there).
 @group(0) @binding(9) var<storage, read_write> affine: array<mat3x3<f32>>;
 
+// Two-field separation only (step/separation.wgsl): ∇D_p per particle, the ridge gradient
+// per pool node, and the far field (velocity xyz, mass w; then the velocity change) per
+// pool node, written by p2g.wgsl.
+@group(0) @binding(10) var<storage, read> damage_gradient: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read> ridge: array<vec4<f32>>;
+@group(0) @binding(12) var<storage, read> far_field: array<vec4<f32>>;
+
 fn count_failure(slot: u32) {
     atomicAdd(&flags[slot], 1u);
     // compact_blocks.wgsl has already counted this step
@@ -60,19 +67,34 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let base = vec3<u32>(s.base);
     let blocks = stencil_blocks(base);
     let flip = consts.flip;
+    let two = consts.separation != 0u;
+    var gradient = vec3<f32>(0.0);
+    if two {
+        gradient = damage_gradient[p].xyz;
+    }
     var vp = vec3<f32>(0.0);
     var dv = vec3<f32>(0.0);
     var b = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
     for (var k = 0u; k < 27u; k++) {
         let off = bspline_stencil_offset(k);
-        let texel = grid_texel(stencil_node(blocks, off));
-        let vi = textureLoad(grid_velocity, texel, 0).xyz;
+        let node = stencil_node(blocks, off);
+        let texel = grid_texel(node);
+        // the field of this node that holds the particle
+        let far = two && node != NO_SLOT && in_far_field(gradient, ridge[node].xyz);
+        var vi = textureLoad(grid_velocity, texel, 0).xyz;
+        if far {
+            vi = far_field[2u * node].xyz;
+        }
         let w = bspline_weight(s, off);
         let d = bspline_offset(s, off, consts.dx);
         vp += w * vi;
         b += mat3x3<f32>(vi * (w * d.x), vi * (w * d.y), vi * (w * d.z));
         if flip > 0.0 {
-            dv += w * textureLoad(grid_velocity_change, texel, 0).xyz;
+            if far {
+                dv += w * far_field[2u * node + 1u].xyz;
+            } else {
+                dv += w * textureLoad(grid_velocity_change, texel, 0).xyz;
+            }
         }
     }
     let c = b * (4.0 / (consts.dx * consts.dx));

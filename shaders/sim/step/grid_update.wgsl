@@ -127,8 +127,19 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
         return vec3<f32>(0.0);
     }
+    return constrained_velocity(i, trial_velocity(momentum, mass));
+}
+
+// p/m + Δt g: the velocity before the boundary conditions.
+fn trial_velocity(momentum: vec3<f32>, mass: f32) -> vec3<f32> {
+    return momentum / mass + consts.gravity * consts.dt;
+}
+
+// Velocity `v_in` of node i after the colliders, the moving colliders, the captured
+// surface and the walls, in that order (docs/method.md §2).
+fn constrained_velocity(i: vec3<u32>, v_in: vec3<f32>) -> vec3<f32> {
     let x = consts.lo + vec3<f32>(i) * consts.dx;
-    var v = momentum / mass + consts.gravity * consts.dt;
+    var v = v_in;
     for (var k = 0u; k < step.num_colliders; k++) {
         let c = step.colliders[k];
         if dot(x - c.point.xyz, c.normal.xyz) <= 0.0 {

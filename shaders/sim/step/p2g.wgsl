@@ -14,6 +14,12 @@
 @group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
 // xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
 @group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
+// Two-field separation only (step/separation.wgsl): ∇D_p per particle (xyz), the ridge
+// gradient per pool node, and the far field per pool node: velocity xyz and mass w, then
+// the velocity change (FLIP/PIC blends)
+@group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
 // The blocks some particle's stencil reaches (compact_blocks.wgsl); nodes elsewhere are left
 // as they are: no particle reads them.
 @group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
@@ -36,10 +42,23 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let node = vec3<i32>(bn.node);
     let bc = vec3<i32>(consts.cells) - 1;
     let carry = consts.flip > 0.0;
+    let two = consts.separation != 0u;
+    var ridge_i = vec3<f32>(0.0);
+    if two {
+        ridge_i = ridge[idx].xyz;
+    }
+    // Σ w m, Σ w (m v + affine d), Σ w m v (FLIP/PIC blends only); with two fields the
+    // near field's, and the far field's apart, with both fields' Σ m ∇w (with respect to
+    // the node). Scalars, not arrays indexed by field: a local array indexed at run time
+    // goes to memory on a CPU driver (lavapipe).
     var msum = 0.0;
     var psum = vec3<f32>(0.0);
-    // Σ w m_p v_p, without the stress and affine terms (FLIP/PIC blends only)
     var qsum = vec3<f32>(0.0);
+    var g_near = vec3<f32>(0.0);
+    var m_far = 0.0;
+    var p_far = vec3<f32>(0.0);
+    var q_far = vec3<f32>(0.0);
+    var g_far = vec3<f32>(0.0);
     for (var oz = 0; oz < 3; oz++) {
         for (var oy = 0; oy < 3; oy++) {
             for (var ox = 0; ox < 3; ox++) {
@@ -57,8 +76,21 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
                     let w = bspline_weight(s, off);
                     let d = bspline_offset(s, off, consts.dx);
                     let mv = xm.w * v_volume[p].xyz;
+                    let mom = w * (mv + affine[p] * d);
+                    if two {
+                        // ∇w with respect to the node is minus that with respect to x_p
+                        let gm = -xm.w * bspline_weight_grad(s, off, consts.inv_dx);
+                        if in_far_field(damage_gradient[p].xyz, ridge_i) {
+                            m_far += w * xm.w;
+                            p_far += mom;
+                            q_far += w * mv;
+                            g_far += gm;
+                            continue;
+                        }
+                        g_near += gm;
+                    }
                     msum += w * xm.w;
-                    psum += w * (mv + affine[p] * d);
+                    psum += mom;
                     if carry {
                         qsum += w * mv;
                     }
@@ -66,10 +98,44 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             }
         }
     }
-    let v = node_velocity(vec3<u32>(node), psum, msum);
-    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, msum));
+    if !two {
+        let v = node_velocity(vec3<u32>(node), psum, msum);
+        textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, msum));
+        if carry {
+            let dv = select(vec3<f32>(0.0), v - qsum / msum, msum > 0.0);
+            textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv, 0.0));
+        }
+        return;
+    }
+    // Two fields: trial velocities, the contact where the node holds both, then each
+    // field's boundary conditions (cpu::grid_update_at).
+    var v_near = vec3<f32>(0.0);
+    var v_far = vec3<f32>(0.0);
+    if msum > 0.0 {
+        v_near = trial_velocity(psum, msum);
+    }
+    if m_far > 0.0 {
+        v_far = trial_velocity(p_far, m_far);
+    }
+    if msum > 0.0 && m_far > 0.0 {
+        let c = field_contact(msum, v_near, g_near, m_far, v_far, g_far);
+        v_near = c.near;
+        v_far = c.far;
+    }
+    var dv_near = vec3<f32>(0.0);
+    var dv_far = vec3<f32>(0.0);
+    if msum > 0.0 {
+        v_near = constrained_velocity(vec3<u32>(node), v_near);
+        dv_near = v_near - qsum / msum;
+    }
+    if m_far > 0.0 {
+        v_far = constrained_velocity(vec3<u32>(node), v_far);
+        dv_far = v_far - q_far / m_far;
+    }
+    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v_near, msum));
+    far_field[2u * idx] = vec4<f32>(v_far, m_far);
     if carry {
-        let dv = select(vec3<f32>(0.0), v - qsum / msum, msum > 0.0);
-        textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv, 0.0));
+        textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv_near, 0.0));
+        far_field[2u * idx + 1u] = vec4<f32>(dv_far, 0.0);
     }
 }

@@ -160,7 +160,7 @@ pub fn prepare(
         gravity: vec3(spec.gravity),
         boundaries,
         transfer: spec.transfer.build(o)?,
-        separation: Default::default(),
+        separation: spec.separation.into(),
     };
     Ok(Some(SimulationSetup {
         splats: out.splats,

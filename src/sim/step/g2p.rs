@@ -45,6 +45,11 @@ impl G2p {
                 ("flags", b.flags.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
                 ("affine", Buffer(b.window(&b.affine, i, MAT3))),
+                // Two-field separation runs on one page: whole buffers (one element
+                // each, unread, without it).
+                ("damage_gradient", b.damage_gradient.as_entire_binding()),
+                ("ridge", b.ridge.as_entire_binding()),
+                ("far_field", b.far_field.as_entire_binding()),
             ],
         )
     }

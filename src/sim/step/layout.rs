@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3};
 use crate::gpu::GpuError;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use crate::sim::wgsl::NaccMaterialGpu;
-use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams};
+use crate::sim::{BoundaryKind, Condition, Grid, Material, Separation, StepParams};
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
@@ -140,7 +140,9 @@ pub struct GpuStep {
     pub pool_blocks: u32,
     /// The FLIP share of G2P's velocity (`Transfer::flip`; 0: none).
     pub flip: f32,
-    pub _pad: [u32; 3],
+    /// Two velocity fields per node (`Separation::DamageGradient`: 1) or one (0).
+    pub separation: u32,
+    pub _pad: [u32; 2],
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
@@ -225,7 +227,8 @@ impl GpuStep {
             num_kinematic: 0,
             pool_blocks: 0,
             flip: params.transfer.flip() as f32,
-            _pad: [0; 3],
+            separation: u32::from(params.separation != Separation::None),
+            _pad: [0; 2],
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -294,6 +297,7 @@ mod tests {
                 num_kinematic,
                 pool_blocks,
                 flip,
+                separation,
                 surface,
                 walls,
                 colliders,

@@ -9,10 +9,15 @@
 //!    for its tiles);
 //! 4. [`MarkBlocks`], [`CompactBlocks`] — the blocks of 4³ nodes an occupied cell's
 //!    stencils reach, listed with a pool slot each (the node passes run only there);
-//! 5. [`P2gGather`] — per node of the active blocks: gather mass and momentum from the
-//!    27 cells whose stencils reach it (deterministic, no atomics), then the grid update
-//!    (`grid_update.wgsl`: velocity, gravity, colliders, walls);
-//! 6. [`G2p`] — velocities, C, F, positions, the material's plasticity.
+//! 5. with two-field separation (docs/method.md §4.9) [`DamageField`], [`DamageGradient`]
+//!    and [`Ridge`] — the nodes' damage field, each particle's damage gradient and each
+//!    node's ridge gradient, which split a node's particles into two fields;
+//! 6. [`P2gGather`] — per node of the active blocks: gather mass and momentum from the
+//!    27 cells whose stencils reach it (deterministic, no atomics; per field with
+//!    separation), then the grid update (`grid_update.wgsl`: velocity, gravity, colliders,
+//!    walls; with separation the fields' contact first);
+//! 7. [`G2p`] — velocities, C, F, positions, the material's plasticity (each particle from
+//!    its own field).
 //!
 //! Where the adapter has float atomics, steps 2–5 are instead [`MarkParticles`] (each
 //! particle flags the blocks of its stencil), [`CompactBlocks`], [`P2gScatter`] (each
@@ -23,6 +28,8 @@
 //! same named stages the renderer uses (`gpu::stages`).
 
 mod compact_blocks;
+mod damage_field;
+mod damage_gradient;
 mod g2p;
 mod grid_from_sums;
 pub mod layout;
@@ -31,8 +38,11 @@ mod mark_particles;
 mod p2g;
 mod p2g_scatter;
 mod prepare;
+mod ridge;
 
 pub(crate) use compact_blocks::CompactBlocks;
+pub(crate) use damage_field::DamageField;
+pub(crate) use damage_gradient::DamageGradient;
 pub(crate) use g2p::G2p;
 pub(crate) use grid_from_sums::GridFromSums;
 pub(crate) use mark_blocks::MarkBlocks;
@@ -40,6 +50,7 @@ pub(crate) use mark_particles::MarkParticles;
 pub(crate) use p2g::P2gGather;
 pub(crate) use p2g_scatter::P2gScatter;
 pub(crate) use prepare::Prepare;
+pub(crate) use ridge::Ridge;
 
 use crate::gpu::pages::PageRanges;
 use crate::gpu::ranges::Ranges;
@@ -56,6 +67,7 @@ pub(crate) fn source(pass: &str) -> String {
         include_str!("../../../shaders/sim/step/common.wgsl"),
         crate::sim::models::wgsl().as_str(),
         include_str!("../../../shaders/sim/step/grid_update.wgsl"),
+        include_str!("../../../shaders/sim/step/separation.wgsl"),
         pass,
     ]
     .join("\n")
@@ -99,6 +111,14 @@ pub(crate) struct StepBuffers {
     pub active_blocks: wgpu::Buffer,
     pub block_args: wgpu::Buffer,
     pub flags: wgpu::Buffer,
+    /// Two-field separation (`separation.wgsl`; one element each without it): per pool
+    /// node the damage field (vec2) and the ridge gradient (vec4), per particle ∇D_p
+    /// (vec4), and per pool node the far field's velocity and mass, then its velocity
+    /// change (2 × vec4).
+    pub damage: wgpu::Buffer,
+    pub ridge: wgpu::Buffer,
+    pub damage_gradient: wgpu::Buffer,
+    pub far_field: wgpu::Buffer,
     /// How the particle arrays split into pages, one entry per page for its dispatches.
     pub pages: PageRanges,
 }
@@ -186,6 +206,14 @@ pub(crate) struct Passes {
     gather: P2gGather,
     g2p: G2p,
     atomic: Option<AtomicPasses>,
+    separation: Option<SeparationPasses>,
+}
+
+/// Two-field separation's passes (gather path only).
+struct SeparationPasses {
+    damage_field: DamageField,
+    damage_gradient: DamageGradient,
+    ridge: Ridge,
 }
 
 struct AtomicPasses {
@@ -213,6 +241,8 @@ struct GatherBinds {
     ranges: wgpu::BindGroup,
     mark_blocks: wgpu::BindGroup,
     gather: wgpu::BindGroup,
+    /// Two-field separation's: damage field, damage gradient, ridge.
+    separation: Option<[wgpu::BindGroup; 3]>,
 }
 
 struct AtomicBinds {
@@ -233,6 +263,9 @@ pub(crate) enum StepPass {
     Ranges,
     MarkBlocks,
     CompactBlocks,
+    DamageField,
+    DamageGradient,
+    Ridge,
     Gather,
     G2p,
 }
@@ -249,6 +282,9 @@ impl StepPass {
             StepPass::Ranges => "cell ranges",
             StepPass::MarkBlocks => "mark blocks",
             StepPass::CompactBlocks => "compact blocks",
+            StepPass::DamageField => "damage field",
+            StepPass::DamageGradient => "damage gradient",
+            StepPass::Ridge => "ridge",
             StepPass::Gather => "p2g gather + grid",
             StepPass::G2p => "g2p",
         }
@@ -256,8 +292,14 @@ impl StepPass {
 }
 
 impl Passes {
-    /// Compile the passes; the atomic path's with `atomic`.
-    pub fn new(device: &wgpu::Device, executor: Executor, atomic: bool) -> Passes {
+    /// Compile the passes; the atomic path's with `atomic`, two-field separation's with
+    /// `separation` (on the gather path).
+    pub fn new(
+        device: &wgpu::Device,
+        executor: Executor,
+        atomic: bool,
+        separation: bool,
+    ) -> Passes {
         Passes {
             prepare: Prepare::new(device),
             sort: RadixSort::new(device, executor),
@@ -271,6 +313,11 @@ impl Passes {
                 mark: MarkParticles::new(device),
                 scatter: P2gScatter::new(device),
                 grid: GridFromSums::new(device),
+            }),
+            separation: (separation && !atomic).then(|| SeparationPasses {
+                damage_field: DamageField::new(device),
+                damage_gradient: DamageGradient::new(device),
+                ridge: Ridge::new(device),
             }),
         }
     }
@@ -335,6 +382,13 @@ impl Passes {
                 .bind(device, &[&b.key_count, sorted.keys, &b.ranges]),
             mark_blocks: self.mark_blocks.bind(device, b, &sorted),
             gather: self.gather.bind(device, b, &sorted),
+            separation: self.separation.as_ref().map(|s| {
+                [
+                    s.damage_field.bind(device, b, &sorted),
+                    s.damage_gradient.bind(device, b),
+                    s.ridge.bind(device, b, &sorted),
+                ]
+            }),
             sort,
         }
     }
@@ -353,7 +407,13 @@ impl Passes {
         }
         match &self.atomic {
             Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
-            None => list.extend([Sort, Ranges, MarkBlocks, CompactBlocks, Gather]),
+            None => {
+                list.extend([Sort, Ranges, MarkBlocks, CompactBlocks]);
+                if self.separation.is_some() {
+                    list.extend([DamageField, DamageGradient, Ridge]);
+                }
+                list.push(Gather);
+            }
         }
         list.push(G2p);
         list
@@ -417,6 +477,18 @@ impl Passes {
                     StepPass::CompactBlocks => {
                         self.compact_blocks.record(c, &binds.compact_blocks, blocks)
                     }
+                    StepPass::DamageField => {
+                        let (s, sb) = self.separation_passes(binds);
+                        s.damage_field.record(c, &sb[0], b);
+                    }
+                    StepPass::DamageGradient => {
+                        let (s, sb) = self.separation_passes(binds);
+                        s.damage_gradient.record(c, &sb[1], particles);
+                    }
+                    StepPass::Ridge => {
+                        let (s, sb) = self.separation_passes(binds);
+                        s.ridge.record(c, &sb[2], b);
+                    }
                     StepPass::Gather => self.gather.record(c, &gather_binds(binds).gather, b),
                     StepPass::G2p => {
                         for (bind, n) in binds.pages(&binds.g2p) {
@@ -426,6 +498,16 @@ impl Passes {
                 })
             })
             .collect()
+    }
+
+    fn separation_passes<'a>(
+        &'a self,
+        binds: &'a Binds,
+    ) -> (&'a SeparationPasses, &'a [wgpu::BindGroup; 3]) {
+        match (&self.separation, &gather_binds(binds).separation) {
+            (Some(s), Some(b)) => (s, b),
+            _ => unreachable!("separation pass recorded without separation"),
+        }
     }
 
     fn atomic_passes<'a>(&'a self, binds: &'a Binds) -> (&'a AtomicPasses, &'a AtomicBinds) {

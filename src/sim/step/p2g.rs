@@ -34,6 +34,9 @@ impl P2gGather {
                 ("block_args", b.block_args.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
                 ("surface", b.surface.as_entire_binding()),
+                ("damage_gradient", b.damage_gradient.as_entire_binding()),
+                ("ridge", b.ridge.as_entire_binding()),
+                ("far_field", b.far_field.as_entire_binding()),
             ],
         )
     }
