@@ -142,6 +142,8 @@ pub struct GpuSim {
     /// The step constants as uploaded (moving colliders are added by `set_kinematic`).
     consts: GpuStep,
     kinematic: Vec<KinematicCollider>,
+    /// Two-field separation (its buffers are sized to the pool).
+    separation: bool,
     dt: f64,
     /// Start time of the next substep, in seconds (the moving colliders' clock).
     time: std::cell::Cell<f64>,
@@ -186,8 +188,8 @@ fn velocity_change_texture(device: &wgpu::Device, step: &GpuStep, blocks: u32) -
 
 /// Bytes of a per-node array of two-field separation for a pool of `blocks`: `per_node`
 /// bytes a node with separation, one node's worth (bound, never read) without.
-fn separation_bytes(step: &GpuStep, blocks: u32, per_node: u64) -> u64 {
-    if step.separation != 0 {
+fn separation_bytes(separation: bool, blocks: u32, per_node: u64) -> u64 {
+    if separation {
         u64::from(blocks) * 64 * per_node
     } else {
         per_node
@@ -342,14 +344,18 @@ impl GpuSim {
                 mapped_at_creation: false,
             }),
             flags: zeroed(gpu, "sim watchdog flags", 32),
-            damage: zeroed(gpu, "sim damage field", separation_bytes(&step, pool, 8)),
-            ridge: zeroed(gpu, "sim ridge", separation_bytes(&step, pool, 16)),
+            damage: zeroed(
+                gpu,
+                "sim damage field",
+                separation_bytes(separation, pool, 8),
+            ),
+            ridge: zeroed(gpu, "sim ridge", separation_bytes(separation, pool, 16)),
             damage_gradient: zeroed(
                 gpu,
                 "sim damage gradient",
                 if separation { nn.max(1) * 16 } else { 16 },
             ),
-            far_field: zeroed(gpu, "sim far field", separation_bytes(&step, pool, 32)),
+            far_field: zeroed(gpu, "sim far field", separation_bytes(separation, pool, 32)),
             pages: PageRanges::new(device, "sim particle pages", pages),
         };
         let sort_bits = 32 - base_cells.leading_zeros();
@@ -365,6 +371,7 @@ impl GpuSim {
             sort_bits,
             consts: step,
             kinematic: Vec::new(),
+            separation,
             dt: params.dt,
             time: std::cell::Cell::new(0.0),
             saved: None,
@@ -545,10 +552,10 @@ impl GpuSim {
         self.buffers.grid_velocity_change =
             velocity_change_texture(&gpu.device, &self.consts, blocks);
         self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
-        let c = &self.consts;
-        self.buffers.damage = zeroed(gpu, "sim damage field", separation_bytes(c, blocks, 8));
-        self.buffers.ridge = zeroed(gpu, "sim ridge", separation_bytes(c, blocks, 16));
-        self.buffers.far_field = zeroed(gpu, "sim far field", separation_bytes(c, blocks, 32));
+        let two = self.separation;
+        self.buffers.damage = zeroed(gpu, "sim damage field", separation_bytes(two, blocks, 8));
+        self.buffers.ridge = zeroed(gpu, "sim ridge", separation_bytes(two, blocks, 16));
+        self.buffers.far_field = zeroed(gpu, "sim far field", separation_bytes(two, blocks, 32));
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
         self.binds = self.passes.bind(

@@ -20,6 +20,9 @@
 //! | §4 | return-mapping table: elastic, tips, case 3 | [`nacc::project_pq`] |
 //! | §4 | case 3: `center`, `continuous{k}`, `closest_point` | [`nacc::Case3Variant`] |
 //! | §4 | back to F (J_E(p), scaled s, det b̄ = 1 solve) and hardening | [`nacc::return_map`] |
+//! | §4.9 | damage d = clamp((α − α₀)/(−α₀), 0, 1) | [`Material::damage`] |
+//! | §4.9 | damage field D_i, ∇D_p, ridge g_i, near/far partition | [`separation::partition`] |
+//! | §4.9 | two-field contact about v_cm along n̂_near − n̂_far | [`separation::contact`] |
 
 pub mod boundary;
 pub mod bspline;

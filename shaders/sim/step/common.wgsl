@@ -86,8 +86,7 @@ struct SimStep {
     // the FLIP share of G2P's velocity (0: APIC or PIC; the grid's velocity change is then
     // neither written nor read)
     flip: f32,
-    // two velocity fields per node (1: docs/method.md §4.9, step/separation.wgsl) or one (0)
-    separation: u32,
+    _pad0: u32,
     _pad1: u32,
     _pad2: u32,
     surface: SurfaceCondition,
@@ -125,7 +124,6 @@ struct StepConsts {
     pool_blocks: u32,
     apic: u32,
     flip: f32,
-    separation: u32,
     // step.materials[0], read for all invocations at once; particle_material
     material0: SimMaterial,
 }
@@ -144,7 +142,6 @@ fn read_consts() {
     consts.pool_blocks = step.pool_blocks;
     consts.apic = step.apic;
     consts.flip = step.flip;
-    consts.separation = step.separation;
     consts.material0 = step.materials[0];
 }
 

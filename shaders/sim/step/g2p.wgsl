@@ -67,7 +67,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let base = vec3<u32>(s.base);
     let blocks = stencil_blocks(base);
     let flip = consts.flip;
-    let two = consts.separation != 0u;
+    // SEPARATION: a constant G2p prepends (two-field separation compiled in or out)
+    let two = SEPARATION;
     var gradient = vec3<f32>(0.0);
     if two {
         gradient = damage_gradient[p].xyz;

@@ -42,7 +42,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let node = vec3<i32>(bn.node);
     let bc = vec3<i32>(consts.cells) - 1;
     let carry = consts.flip > 0.0;
-    let two = consts.separation != 0u;
+    // SEPARATION: a constant P2gGather prepends (two-field separation compiled in or out)
+    let two = SEPARATION;
     var ridge_i = vec3<f32>(0.0);
     if two {
         ridge_i = ridge[idx].xyz;

@@ -1,5 +1,6 @@
 // Two-field separation (docs/method.md §4.9, `sim::separation`): what its passes
-// (damage_field, damage_gradient, ridge), P2G and G2P share. With `consts.separation` set,
+// (damage_field, damage_gradient, ridge), P2G and G2P share. With separation (P2G's and
+// G2P's SEPARATION constant),
 // a node holds the particles across the damage ridge from the one that set its ridge
 // gradient g_i (∇D_p · g_i < 0) in a second, far field: P2G sums them there, the grid
 // update makes both fields' velocities meet at a frictionless contact, and G2P reads each

@@ -12,10 +12,11 @@ pub(crate) struct G2p {
 
 impl G2p {
     /// With `next_affine`, G2P also writes the next step's affine term (the atomic path,
-    /// whose later steps then skip [`super::Prepare`]).
-    pub fn new(device: &wgpu::Device, next_affine: bool) -> Self {
+    /// whose later steps then skip [`super::Prepare`]); with `separation`, each particle
+    /// reads its own field (two-field separation compiled in).
+    pub fn new(device: &wgpu::Device, next_affine: bool, separation: bool) -> Self {
         let src = format!(
-            "const NEXT_AFFINE: bool = {next_affine};\n{}",
+            "const NEXT_AFFINE: bool = {next_affine};\nconst SEPARATION: bool = {separation};\n{}",
             include_str!("../../../shaders/sim/step/g2p.wgsl")
         );
         G2p {

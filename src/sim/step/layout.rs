@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3};
 use crate::gpu::GpuError;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use crate::sim::wgsl::NaccMaterialGpu;
-use crate::sim::{BoundaryKind, Condition, Grid, Material, Separation, StepParams};
+use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams};
 
 pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
@@ -140,9 +140,7 @@ pub struct GpuStep {
     pub pool_blocks: u32,
     /// The FLIP share of G2P's velocity (`Transfer::flip`; 0: none).
     pub flip: f32,
-    /// Two velocity fields per node (`Separation::DamageGradient`: 1) or one (0).
-    pub separation: u32,
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
@@ -227,8 +225,7 @@ impl GpuStep {
             num_kinematic: 0,
             pool_blocks: 0,
             flip: params.transfer.flip() as f32,
-            separation: u32::from(params.separation != Separation::None),
-            _pad: [0; 2],
+            _pad: [0; 3],
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -297,7 +294,6 @@ mod tests {
                 num_kinematic,
                 pool_blocks,
                 flip,
-                separation,
                 surface,
                 walls,
                 colliders,

@@ -307,8 +307,8 @@ impl Passes {
             ranges: Ranges::new(device),
             mark_blocks: MarkBlocks::new(device),
             compact_blocks: CompactBlocks::new(device),
-            gather: P2gGather::new(device),
-            g2p: G2p::new(device, atomic),
+            gather: P2gGather::new(device, separation),
+            g2p: G2p::new(device, atomic, separation),
             atomic: atomic.then(|| AtomicPasses {
                 mark: MarkParticles::new(device),
                 scatter: P2gScatter::new(device),

@@ -11,10 +11,14 @@ pub(crate) struct P2gGather {
 }
 
 impl P2gGather {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let src = include_str!("../../../shaders/sim/step/p2g.wgsl");
+    /// With `separation`, per field (two-field separation compiled in).
+    pub fn new(device: &wgpu::Device, separation: bool) -> Self {
+        let src = format!(
+            "const SEPARATION: bool = {separation};\n{}",
+            include_str!("../../../shaders/sim/step/p2g.wgsl")
+        );
         P2gGather {
-            kernel: step_kernel(device, "sim p2g", src),
+            kernel: step_kernel(device, "sim p2g", &src),
         }
     }
 
