@@ -829,11 +829,12 @@ fn sim_scene(frames: u32, dt: &str, e: f64) -> String {
 /// under gravity, its bottom well above the ground), and the frames show it. The state is
 /// read, not the images alone: the orbit camera moves every frame, so two images would
 /// differ with the simulation frozen. The same with the FLIP/PIC blend, which carries a
-/// free fall exactly too.
+/// free fall exactly too, and with two-field separation (its passes run; nothing breaks).
 #[test]
 fn simulated_scene_renders_moving_frames() {
     simulated_cube_falls("");
     simulated_cube_falls(r#""transfer": {"flip": 0.7},"#);
+    simulated_cube_falls(r#""separation": "damage_gradient","#);
 }
 
 fn simulated_cube_falls(transfer: &str) {
@@ -956,6 +957,17 @@ fn bad_transfer_is_reported() {
         &[],
     );
     assert_mentions(&line, &["pic.json", "transfer", "\"apic\"", "flip"]);
+}
+
+/// `simulation.separation` misspelt: one error line naming the value and the choices.
+#[test]
+fn bad_separation_is_reported() {
+    let line = render_scene_error(
+        "dfg.json",
+        &sim_scene(1, r#""separation": "dfg","#, 200.0),
+        &[],
+    );
+    assert_mentions(&line, &["dfg.json", "separation", "dfg", "damage_gradient"]);
 }
 
 /// A step far above the CFL bound: a warning names the suggested Δt, then the watchdog

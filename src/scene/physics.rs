@@ -60,12 +60,26 @@ pub struct SimulationSpec {
 }
 
 /// `simulation.separation`.
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, Serialize, JsonSchema, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SeparationSpec {
     #[default]
     None,
     DamageGradient,
+}
+
+/// By name, with an error that names the field (serde's own names only the value).
+impl<'de> Deserialize<'de> for SeparationSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let name = String::deserialize(d)?;
+        match name.as_str() {
+            "none" => Ok(SeparationSpec::None),
+            "damage_gradient" => Ok(SeparationSpec::DamageGradient),
+            other => Err(serde::de::Error::custom(format!(
+                "`separation`: {other:?} is not one of \"none\", \"damage_gradient\""
+            ))),
+        }
+    }
 }
 
 impl From<SeparationSpec> for Separation {
