@@ -5,8 +5,6 @@
 // a fixed order and the result is the same on every run and every backend. Mirrors
 // `cpu::p2g` followed by `cpu::grid_update`.
 
-@group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
-@group(0) @binding(2) var<storage, read> cell_values: array<u32>;
 @group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
@@ -20,27 +18,17 @@
 @group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
-// The blocks some particle's stencil reaches (compact_blocks.wgsl); nodes elsewhere are left
-// as they are: no particle reads them.
-@group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
-// [3]: the number of active blocks
-@group(0) @binding(8) var<storage, read> block_args: array<u32, 4>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     read_consts();
-    let slot = wid.x + wid.y * nwg.x;
-    if slot >= listed_blocks(block_args[3]) {
-        return;
-    }
-    let bn = block_node(active_blocks[slot], lid);
+    let bn = gathering_node(wid, nwg, lid);
     if !bn.ok {
         return;
     }
     let idx = bn.index;
-    let node = vec3<i32>(bn.node);
-    let bc = vec3<i32>(consts.cells) - 1;
+    let node = bn.node;
     let carry = consts.flip > 0.0;
     // SEPARATION: a constant P2gGather prepends (two-field separation compiled in or out)
     let two = SEPARATION;
@@ -60,47 +48,38 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     var p_far = vec3<f32>(0.0);
     var q_far = vec3<f32>(0.0);
     var g_far = vec3<f32>(0.0);
-    for (var oz = 0; oz < 3; oz++) {
-        for (var oy = 0; oy < 3; oy++) {
-            for (var ox = 0; ox < 3; ox++) {
-                let b = node - vec3<i32>(ox, oy, oz);
-                if any(b < vec3<i32>(0)) || any(b >= bc) {
+    for (var n = 0u; n < 27u; n++) {
+        let off = bspline_stencil_offset(n);
+        let run = reaching_run(node, off);
+        for (var k = run.x; k < run.y; k++) {
+            let p = cell_values[k];
+            let xm = x_mass[p];
+            let s = bspline_stencil(xm.xyz - consts.lo, consts.inv_dx);
+            let w = bspline_weight(s, off);
+            let d = bspline_offset(s, off, consts.dx);
+            let mv = xm.w * v_volume[p].xyz;
+            let mom = w * (mv + affine[p] * d);
+            if two {
+                // ∇w with respect to the node is minus that with respect to x_p
+                let gm = -xm.w * bspline_weight_grad(s, off, consts.inv_dx);
+                if in_far_field(damage_gradient[p].xyz, ridge_i) {
+                    m_far += w * xm.w;
+                    p_far += mom;
+                    q_far += w * mv;
+                    g_far += gm;
                     continue;
                 }
-                let cell = u32(b.x + bc.x * (b.y + bc.y * b.z));
-                let range = ranges[cell];
-                let off = vec3<u32>(u32(ox), u32(oy), u32(oz));
-                for (var k = range.x; k < range.y; k++) {
-                    let p = cell_values[k];
-                    let xm = x_mass[p];
-                    let s = bspline_stencil(xm.xyz - consts.lo, consts.inv_dx);
-                    let w = bspline_weight(s, off);
-                    let d = bspline_offset(s, off, consts.dx);
-                    let mv = xm.w * v_volume[p].xyz;
-                    let mom = w * (mv + affine[p] * d);
-                    if two {
-                        // ∇w with respect to the node is minus that with respect to x_p
-                        let gm = -xm.w * bspline_weight_grad(s, off, consts.inv_dx);
-                        if in_far_field(damage_gradient[p].xyz, ridge_i) {
-                            m_far += w * xm.w;
-                            p_far += mom;
-                            q_far += w * mv;
-                            g_far += gm;
-                            continue;
-                        }
-                        g_near += gm;
-                    }
-                    msum += w * xm.w;
-                    psum += mom;
-                    if carry {
-                        qsum += w * mv;
-                    }
-                }
+                g_near += gm;
+            }
+            msum += w * xm.w;
+            psum += mom;
+            if carry {
+                qsum += w * mv;
             }
         }
     }
     if !two {
-        let v = node_velocity(vec3<u32>(node), psum, msum);
+        let v = node_velocity(node, psum, msum);
         textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, msum));
         if carry {
             let dv = select(vec3<f32>(0.0), v - qsum / msum, msum > 0.0);
@@ -126,11 +105,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     var dv_near = vec3<f32>(0.0);
     var dv_far = vec3<f32>(0.0);
     if msum > 0.0 {
-        v_near = constrained_velocity(vec3<u32>(node), v_near);
+        v_near = constrained_velocity(node, v_near);
         dv_near = v_near - qsum / msum;
     }
     if m_far > 0.0 {
-        v_far = constrained_velocity(vec3<u32>(node), v_far);
+        v_far = constrained_velocity(node, v_far);
         dv_far = v_far - q_far / m_far;
     }
     textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v_near, msum));

@@ -5,51 +5,32 @@
 // put a particle in the node's far field when ∇D_p · g_i < 0. Mirrors
 // `separation::node_gradients`.
 
-@group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
-@group(0) @binding(2) var<storage, read> cell_values: array<u32>;
 // y: 1 where a broken particle reaches the node (damage_field.wgsl)
 @group(0) @binding(3) var<storage, read> damage: array<vec2<f32>>;
 // xyz: ∇D_p, w: |∇D_p|² (damage_gradient.wgsl)
 @group(0) @binding(4) var<storage, read> damage_gradient: array<vec4<f32>>;
 // xyz: g_i per pool node
 @group(0) @binding(5) var<storage, read_write> ridge: array<vec4<f32>>;
-@group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
-// [3]: the number of active blocks
-@group(0) @binding(8) var<storage, read> block_args: array<u32, 4>;
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
         @builtin(local_invocation_index) lid: u32) {
     read_consts();
-    let slot = wid.x + wid.y * nwg.x;
-    if slot >= listed_blocks(block_args[3]) {
-        return;
-    }
-    let bn = block_node(active_blocks[slot], lid);
+    let bn = gathering_node(wid, nwg, lid);
     if !bn.ok {
         return;
     }
     var best = vec4<f32>(0.0);
     var best_p = 0xffffffffu;
     if damage[bn.index].y > 0.0 {
-        let node = vec3<i32>(bn.node);
-        let bc = vec3<i32>(consts.cells) - 1;
-        for (var oz = 0; oz < 3; oz++) {
-            for (var oy = 0; oy < 3; oy++) {
-                for (var ox = 0; ox < 3; ox++) {
-                    let b = node - vec3<i32>(ox, oy, oz);
-                    if any(b < vec3<i32>(0)) || any(b >= bc) {
-                        continue;
-                    }
-                    let range = ranges[u32(b.x + bc.x * (b.y + bc.y * b.z))];
-                    for (var k = range.x; k < range.y; k++) {
-                        let p = cell_values[k];
-                        let g = damage_gradient[p];
-                        if g.w > best.w || (g.w == best.w && g.w > 0.0 && p < best_p) {
-                            best = g;
-                            best_p = p;
-                        }
-                    }
+        for (var n = 0u; n < 27u; n++) {
+            let run = reaching_run(bn.node, bspline_stencil_offset(n));
+            for (var k = run.x; k < run.y; k++) {
+                let p = cell_values[k];
+                let g = damage_gradient[p];
+                if g.w > best.w || (g.w == best.w && g.w > 0.0 && p < best_p) {
+                    best = g;
+                    best_p = p;
                 }
             }
         }

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, Sorted, StepBuffers};
+use super::{gather_bindings, gather_source, step_kernel, Sorted, StepBuffers};
 
 pub(crate) struct DamageField {
     kernel: Kernel,
@@ -11,28 +11,21 @@ pub(crate) struct DamageField {
 
 impl DamageField {
     pub fn new(device: &wgpu::Device) -> Self {
-        let src = include_str!("../../../shaders/sim/step/damage_field.wgsl");
+        let src = gather_source(include_str!("../../../shaders/sim/step/damage_field.wgsl"));
         DamageField {
-            kernel: step_kernel(device, "sim damage field", src),
+            kernel: step_kernel(device, "sim damage field", &src),
         }
     }
 
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
-        self.kernel.bind_named_resources(
-            device,
-            &[
-                ("step", b.step.as_entire_binding()),
-                ("ranges", b.ranges.as_entire_binding()),
-                ("cell_values", sorted.values.as_entire_binding()),
-                ("x_mass", b.x_mass.as_entire_binding()),
-                ("alpha", b.alpha.as_entire_binding()),
-                ("material", b.material.as_entire_binding()),
-                ("damage", b.damage.as_entire_binding()),
-                ("active_blocks", b.active_blocks.as_entire_binding()),
-                ("block_args", b.block_args.as_entire_binding()),
-                ("block_slot", b.block_slot.as_entire_binding()),
-            ],
-        )
+        let own = [
+            ("x_mass", b.x_mass.as_entire_binding()),
+            ("alpha", b.alpha.as_entire_binding()),
+            ("material", b.material.as_entire_binding()),
+            ("damage", b.damage.as_entire_binding()),
+        ];
+        let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
+        self.kernel.bind_named_resources(device, &all)
     }
 
     /// One workgroup per active block.

@@ -73,6 +73,32 @@ pub(crate) fn source(pass: &str) -> String {
     .join("\n")
 }
 
+/// A node pass that gathers from the sorted particles: `node_gather.wgsl` (the cells'
+/// runs, the active blocks, the walk over the 27 base cells), then the pass.
+fn gather_source(pass: &str) -> String {
+    [
+        include_str!("../../../shaders/sim/step/node_gather.wgsl"),
+        pass,
+    ]
+    .join("\n")
+}
+
+/// The bindings `node_gather.wgsl` declares, with the step constants and the block table
+/// every node pass reads.
+fn gather_bindings<'a>(
+    b: &'a StepBuffers,
+    sorted: &'a Sorted,
+) -> [(&'static str, wgpu::BindingResource<'a>); 6] {
+    [
+        ("step", b.step.as_entire_binding()),
+        ("ranges", b.ranges.as_entire_binding()),
+        ("cell_values", sorted.values.as_entire_binding()),
+        ("active_blocks", b.active_blocks.as_entire_binding()),
+        ("block_args", b.block_args.as_entire_binding()),
+        ("block_slot", b.block_slot.as_entire_binding()),
+    ]
+}
+
 /// A step pass: its WGSL after the shared modules, entry point `main`.
 fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
     Kernel::new(device, label, &source(pass), "main")

@@ -4,7 +4,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, Sorted, StepBuffers};
+use super::{gather_bindings, gather_source, step_kernel, Sorted, StepBuffers};
 
 pub(crate) struct P2gGather {
     kernel: Kernel,
@@ -15,7 +15,7 @@ impl P2gGather {
     pub fn new(device: &wgpu::Device, separation: bool) -> Self {
         let src = format!(
             "const SEPARATION: bool = {separation};\n{}",
-            include_str!("../../../shaders/sim/step/p2g.wgsl")
+            gather_source(include_str!("../../../shaders/sim/step/p2g.wgsl"))
         );
         P2gGather {
             kernel: step_kernel(device, "sim p2g", &src),
@@ -23,26 +23,19 @@ impl P2gGather {
     }
 
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
-        self.kernel.bind_named_resources(
-            device,
-            &[
-                ("step", b.step.as_entire_binding()),
-                ("ranges", b.ranges.as_entire_binding()),
-                ("cell_values", sorted.values.as_entire_binding()),
-                ("x_mass", b.x_mass.as_entire_binding()),
-                ("v_volume", b.v_volume.as_entire_binding()),
-                ("affine", b.affine.as_entire_binding()),
-                ("grid_velocity", b.grid_velocity.binding()),
-                ("grid_velocity_change", b.grid_velocity_change.binding()),
-                ("active_blocks", b.active_blocks.as_entire_binding()),
-                ("block_args", b.block_args.as_entire_binding()),
-                ("block_slot", b.block_slot.as_entire_binding()),
-                ("surface", b.surface.as_entire_binding()),
-                ("damage_gradient", b.damage_gradient.as_entire_binding()),
-                ("ridge", b.ridge.as_entire_binding()),
-                ("far_field", b.far_field.as_entire_binding()),
-            ],
-        )
+        let own = [
+            ("x_mass", b.x_mass.as_entire_binding()),
+            ("v_volume", b.v_volume.as_entire_binding()),
+            ("affine", b.affine.as_entire_binding()),
+            ("grid_velocity", b.grid_velocity.binding()),
+            ("grid_velocity_change", b.grid_velocity_change.binding()),
+            ("surface", b.surface.as_entire_binding()),
+            ("damage_gradient", b.damage_gradient.as_entire_binding()),
+            ("ridge", b.ridge.as_entire_binding()),
+            ("far_field", b.far_field.as_entire_binding()),
+        ];
+        let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
+        self.kernel.bind_named_resources(device, &all)
     }
 
     /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, Sorted, StepBuffers};
+use super::{gather_bindings, gather_source, step_kernel, Sorted, StepBuffers};
 
 pub(crate) struct Ridge {
     kernel: Kernel,
@@ -11,27 +11,20 @@ pub(crate) struct Ridge {
 
 impl Ridge {
     pub fn new(device: &wgpu::Device) -> Self {
-        let src = include_str!("../../../shaders/sim/step/ridge.wgsl");
+        let src = gather_source(include_str!("../../../shaders/sim/step/ridge.wgsl"));
         Ridge {
-            kernel: step_kernel(device, "sim ridge", src),
+            kernel: step_kernel(device, "sim ridge", &src),
         }
     }
 
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
-        self.kernel.bind_named_resources(
-            device,
-            &[
-                ("step", b.step.as_entire_binding()),
-                ("ranges", b.ranges.as_entire_binding()),
-                ("cell_values", sorted.values.as_entire_binding()),
-                ("damage", b.damage.as_entire_binding()),
-                ("damage_gradient", b.damage_gradient.as_entire_binding()),
-                ("ridge", b.ridge.as_entire_binding()),
-                ("active_blocks", b.active_blocks.as_entire_binding()),
-                ("block_args", b.block_args.as_entire_binding()),
-                ("block_slot", b.block_slot.as_entire_binding()),
-            ],
-        )
+        let own = [
+            ("damage", b.damage.as_entire_binding()),
+            ("damage_gradient", b.damage_gradient.as_entire_binding()),
+            ("ridge", b.ridge.as_entire_binding()),
+        ];
+        let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
+        self.kernel.bind_named_resources(device, &all)
     }
 
     /// One workgroup per active block.
