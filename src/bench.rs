@@ -637,11 +637,11 @@ impl Peer {
     }
 }
 
-/// The P2G paths `gpu` can run: the sorted gather everywhere, the float-atomic scatter
-/// where the adapter has SHADER_FLOAT32_ATOMIC.
+/// The P2G paths `gpu` can run: the sorted gather and the fixed-point scatter everywhere,
+/// the float-atomic scatter where the adapter has SHADER_FLOAT32_ATOMIC.
 pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
     use crate::sim::gpu::P2gPath;
-    let mut paths = vec![P2gPath::Gather];
+    let mut paths = vec![P2gPath::Gather, P2gPath::Fixed];
     if gpu.features.float32_atomics {
         paths.push(P2gPath::Atomic);
     }

@@ -335,7 +335,7 @@ fn deterministic_fracture_runs_are_byte_identical() {
         );
         expect_success(&o);
         assert!(
-            stderr(&o).contains("P2G gather (deterministic)"),
+            stderr(&o).contains("P2G fixed (deterministic)"),
             "{}",
             describe(&o)
         );
@@ -370,7 +370,7 @@ fn manifest_describes_the_run() {
         (64.into(), 48.into())
     );
     assert_eq!(s["deterministic"], true);
-    assert_eq!(s["p2g"], "gather");
+    assert_eq!(s["p2g"], "fixed");
     assert_eq!(s["steps_per_frame"], 25);
     assert_eq!(s["particles"], 125);
     let frames = m["frames"].as_object().unwrap();

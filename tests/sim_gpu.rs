@@ -22,9 +22,10 @@ fn gpus() -> Vec<GpuContext> {
     splatter::gpu::test_contexts()
 }
 
-/// The P2G paths an adapter can run: the gather always, atomics where supported.
+/// The P2G paths an adapter can run: the gather and the fixed-point scatter always, float
+/// atomics where supported.
 fn paths(gpu: &GpuContext) -> Vec<P2gPath> {
-    let mut list = vec![P2gPath::Gather];
+    let mut list = vec![P2gPath::Gather, P2gPath::Fixed];
     if gpu.features.float32_atomics {
         list.push(P2gPath::Atomic);
     }
@@ -530,14 +531,26 @@ fn gpu_watchdog_counts_and_names_the_first_step() {
         assert_eq!(p.len(), n + 1, "test setup: one lone particle");
         p.v[n] = DVec3::new(1000.0, 0.0, 0.0);
         let sp = params(1e-3, Boundaries::default());
+        // The fixed-point scatter instead counts it in step 0, past its bound of 8 cells a
+        // step (500 m/s here) while still on the grid, and leaves it out of the grid: G2P
+        // then finds no mass there and stops it, so it never leaves.
         for path in paths(&gpu) {
             let sim = GpuSim::with_path(&gpu, &p, &grid, &material, &sp, path).unwrap();
             sim.step(&gpu, 5).unwrap();
             let w = sim.take_watchdog(&gpu).unwrap();
-            assert_eq!((w.escaped, w.first_step), (4, Some(1)), "{path:?}");
-            sim.step(&gpu, 2).unwrap();
-            let w = sim.take_watchdog(&gpu).unwrap();
-            assert_eq!((w.escaped, w.first_step), (2, Some(0)), "{path:?}");
+            let counted = (w.escaped, w.fixed_point_range, w.first_step);
+            let again = || {
+                sim.step(&gpu, 2).unwrap();
+                let w = sim.take_watchdog(&gpu).unwrap();
+                (w.escaped, w.fixed_point_range, w.first_step)
+            };
+            if path == P2gPath::Fixed {
+                assert_eq!(counted, (0, 1, Some(0)), "{path:?}");
+                assert_eq!(again(), (0, 0, None), "{path:?}");
+            } else {
+                assert_eq!(counted, (4, 0, Some(1)), "{path:?}");
+                assert_eq!(again(), (2, 0, Some(0)), "{path:?}");
+            }
         }
     }
 }
@@ -566,25 +579,109 @@ fn gpu_step_over_pages_matches_the_cpu_reference() {
             .err()
             .expect("the gather path refuses pages")
             .to_string();
-        assert!(message.contains("atomic path"), "{message}");
-        if !gpu.features.float32_atomics {
-            continue;
+        assert!(message.contains("fixed-point or atomic path"), "{message}");
+        for path in paths(&gpu).into_iter().filter(|p| *p != P2gPath::Gather) {
+            let (worst, cpu, out) = compare_paged(&gpu, path, &scene, 120, 2, pages);
+            let moved = cpu
+                .x
+                .iter()
+                .zip(&out.x)
+                .zip(&scene.particles.x)
+                .filter(|((_, g), x0)| (**g - **x0).length() > 1e-3 * scene.dx)
+                .count();
+            eprintln!(
+                "{} ({path:?}): {n} particles in {} pages of {}, 120 steps: GPU vs CPU max |Δx| = {worst:.2e} Δx; {moved} moved",
+                gpu.describe(),
+                pages.count,
+                pages.size
+            );
+            assert_eq!(moved, n, "every page's particles move");
+            assert!(worst < 1e-2, "GPU and CPU differ by {worst} Δx");
         }
-        let (worst, cpu, out) = compare_paged(&gpu, P2gPath::Atomic, &scene, 120, 2, pages);
-        let moved = cpu
-            .x
+    }
+}
+
+/// The fixed-point scatter sums in integers, whose addition is associative: two runs of the
+/// NACC sphere's impact (many particles adding to each node from several threads, in an
+/// order that differs between runs) end in the same bits, in every particle's position,
+/// velocity, F and α.
+#[test]
+fn gpu_fixed_point_path_is_bitwise_deterministic() {
+    let scene = nacc_sphere();
+    for gpu in gpus() {
+        let run = || {
+            let grid = Grid::new(scene.grid_lo, scene.grid_hi, scene.dx);
+            let sim = GpuSim::with_path(
+                &gpu,
+                &scene.particles,
+                &grid,
+                &scene.materials,
+                &scene.params,
+                P2gPath::Fixed,
+            )
+            .unwrap();
+            sim.step(&gpu, 60).unwrap();
+            sim.step(&gpu, 60).unwrap();
+            sim.read_particles(&gpu, &scene.particles).unwrap()
+        };
+        let (a, b) = (run(), run());
+        let bits = |p: &Particles| -> Vec<u64> {
+            let mut v: Vec<f64> = Vec::new();
+            for i in 0..p.len() {
+                v.extend(p.x[i].to_array());
+                v.extend(p.v[i].to_array());
+                v.extend(p.f[i].to_cols_array());
+                v.push(p.alpha[i]);
+            }
+            v.iter().map(|x| x.to_bits()).collect()
+        };
+        let differ = bits(&a)
             .iter()
-            .zip(&out.x)
-            .zip(&scene.particles.x)
-            .filter(|((_, g), x0)| (**g - **x0).length() > 1e-3 * scene.dx)
+            .zip(bits(&b))
+            .filter(|(x, y)| **x != *y)
             .count();
         eprintln!(
-            "{}: {n} particles in {} pages of {}, 120 steps: GPU vs CPU max |Δx| = {worst:.2e} Δx; {moved} moved",
-            gpu.describe(),
-            pages.count,
-            pages.size
+            "{}: fixed-point P2G, NACC sphere, 120 steps twice: {differ} values differ",
+            gpu.describe()
         );
-        assert_eq!(moved, n, "every page's particles move");
-        assert!(worst < 1e-2, "GPU and CPU differ by {worst} Δx");
+        assert_eq!(differ, 0, "two runs of the fixed-point path differ");
+    }
+}
+
+/// A particle whose affine term reaches past the fixed-point bound (here a velocity
+/// gradient of 1e6 /s, at rest) is counted in the step it happens, named as the first
+/// step, and adds nothing: the other particles fall exactly as in a run without it.
+#[test]
+fn gpu_fixed_point_range_is_counted_not_summed() {
+    for gpu in gpus() {
+        let dx = 1.0 / 16.0;
+        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+        let body = Particles::sample_box(DVec3::splat(0.3), DVec3::splat(0.4), dx / 2.0, 1000.0);
+        let mut with_outlier = body.clone();
+        with_outlier.append(&Particles::sample_box(
+            DVec3::splat(0.7),
+            DVec3::splat(0.7 + dx / 4.0),
+            dx / 2.0,
+            1000.0,
+        ));
+        let n = body.len();
+        with_outlier.c[n] = DMat3::from_diagonal(DVec3::splat(1e6));
+        let sp = params(1e-3, Boundaries::default());
+        let material = [Material::fixed_corotated(1e4, 0.3)];
+        let run = |p: &Particles| {
+            let sim = GpuSim::with_path(&gpu, p, &grid, &material, &sp, P2gPath::Fixed).unwrap();
+            sim.step(&gpu, 3).unwrap();
+            let w = sim.take_watchdog(&gpu).unwrap();
+            (w, sim.read_particles(&gpu, p).unwrap())
+        };
+        let (quiet, alone) = run(&body);
+        assert_eq!((quiet.fixed_point_range, quiet.first_step), (0, None));
+        let (w, out) = run(&with_outlier);
+        assert_eq!(
+            (w.fixed_point_range, w.first_step, w.nonfinite, w.escaped),
+            (1, Some(0), 0, 0),
+            "{w:?}"
+        );
+        assert_eq!(&out.x[..n], &alone.x[..], "the outlier added to the grid");
     }
 }

@@ -197,7 +197,7 @@ fn a_projectile_strikes_a_jelly() {
 }
 
 fn paths(gpu: &GpuContext) -> Vec<P2gPath> {
-    let mut list = vec![P2gPath::Gather];
+    let mut list = vec![P2gPath::Gather, P2gPath::Fixed];
     if gpu.features.float32_atomics {
         list.push(P2gPath::Atomic);
     }

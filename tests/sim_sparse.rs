@@ -56,7 +56,7 @@ fn sparse_grid_equals_the_dense_result_in_a_quarter_of_the_memory() {
     let dense_grid_bytes = grid.nodes().element_product() as u64 * 16;
     let steps = 40;
     for gpu in splatter::gpu::test_contexts() {
-        let mut paths = vec![P2gPath::Gather];
+        let mut paths = vec![P2gPath::Gather, P2gPath::Fixed];
         if gpu.features.float32_atomics {
             paths.push(P2gPath::Atomic);
         }
@@ -95,6 +95,8 @@ fn sparse_grid_equals_the_dense_result_in_a_quarter_of_the_memory() {
             match path {
                 // Deterministic: the slot a block gets never changes a sum's order.
                 P2gPath::Gather => assert!(identical, "gather path differs by {worst}"),
+                // Deterministic: no order changes an integer sum.
+                P2gPath::Fixed => assert!(identical, "fixed-point path differs by {worst}"),
                 P2gPath::Atomic => assert!(worst < 1e-4 * grid.dx, "{worst}"),
             }
         }

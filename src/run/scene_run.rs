@@ -21,6 +21,7 @@ use crate::scene::simulation::SimulationSetup;
 use crate::scene::{self, BuildReport};
 use crate::sim::frame::FrameError;
 use crate::sim::gpu::{GpuSim, P2gPath, Watchdog};
+use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
 use crate::splat::sh::ShRotator;
 
 pub(super) fn execute(
@@ -81,7 +82,7 @@ pub(super) fn execute(
         Some(job.frames.start)
     };
     let p2g = match &setup {
-        _ if opts.deterministic => P2gPath::Gather,
+        Some(s) if opts.deterministic => P2gPath::deterministic_for(&s.params),
         Some(s) => P2gPath::for_params(gpu, &s.params),
         None => P2gPath::best(gpu),
     };
@@ -359,7 +360,7 @@ impl<'a> Simulation<'a> {
         };
         // Sparse grid: room for the active region to double before the next read.
         self.sim.fit_pool(gpu, &w)?;
-        if w.nonfinite > 0 || w.escaped > 0 {
+        if w.failed() {
             bail!("{}", watchdog_message(frame, w, s));
         }
         Ok(())
@@ -520,6 +521,15 @@ fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
         format!(
             "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}); likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
             w.nonfinite, s.params.dt, s.grid.dx
+        )
+    } else if w.fixed_point_range > 0 {
+        format!(
+            "simulation stopped: {} particle-steps moved faster than the fixed-point P2G's bound of {} cells a step ({:.4e} m/s at Δt {:.3e} s, Δx {}) {steps}; their contributions were not summed; likely cause: Δt far too large for the motion (lower simulation.dt or simulation.cfl)",
+            w.fixed_point_range,
+            FIXED_POINT_CELLS_PER_STEP,
+            FIXED_POINT_CELLS_PER_STEP * s.grid.dx / s.params.dt,
+            s.params.dt,
+            s.grid.dx
         )
     } else {
         let (lo, hi) = (s.grid.lo, s.grid.hi());

@@ -18,7 +18,9 @@ use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
 use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{Binds, GridTexture, Passes, StepBuffers, StepPass, GRID_TEXELS_PER_ROW};
+use super::step::{
+    Binds, GridTexture, Passes, Scatter, StepBuffers, StepPass, GRID_TEXELS_PER_ROW,
+};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
@@ -46,6 +48,17 @@ pub struct Watchdog {
     /// Active blocks that found the grid pool full (their nodes were skipped: the steps are
     /// wrong; grow the pool, [`GpuSim::fit_pool`]).
     pub pool_overflow: u32,
+    /// Particles past the fixed-point P2G's speed bound (`GpuStep::speed_bound`; they added
+    /// nothing to the grid: the steps are wrong).
+    pub fixed_point_range: u32,
+}
+
+impl Watchdog {
+    /// Whether a step counted a particle that makes the run wrong (the pool's overflow,
+    /// which a re-run with a larger pool repairs, aside).
+    pub fn failed(&self) -> bool {
+        self.nonfinite > 0 || self.escaped > 0 || self.fixed_point_range > 0
+    }
 }
 
 /// How P2G sums particle contributions on the grid.
@@ -57,6 +70,10 @@ pub enum P2gPath {
     /// Each particle adds to its 27 nodes with float atomics (SHADER_FLOAT32_ATOMIC): no
     /// sort; the summation order, and so the last bits, vary between runs.
     Atomic,
+    /// Each particle adds to its 27 nodes with integer atomics on 64-bit fixed-point sums
+    /// (docs/method.md §2.4): no sort, and the sums are the same in any order, so
+    /// deterministic; runs on every backend.
+    Fixed,
 }
 
 impl P2gPath {
@@ -65,6 +82,7 @@ impl P2gPath {
         match self {
             P2gPath::Gather => "gather",
             P2gPath::Atomic => "atomic",
+            P2gPath::Fixed => "fixed",
         }
     }
 
@@ -74,6 +92,16 @@ impl P2gPath {
             P2gPath::Atomic
         } else {
             P2gPath::Gather
+        }
+    }
+
+    /// The fastest deterministic path that runs `params`: the gather for two-field
+    /// separation (the scatter paths have one field), else the fixed-point scatter.
+    pub fn deterministic_for(params: &StepParams) -> P2gPath {
+        if params.separation != super::Separation::None {
+            P2gPath::Gather
+        } else {
+            P2gPath::Fixed
         }
     }
 
@@ -88,14 +116,15 @@ impl P2gPath {
     }
 }
 
-/// Bytes of the atomic path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
-/// each, 32 for a FLIP/PIC blend); the gather path sums in registers and needs none (one
-/// placeholder node).
+/// Bytes of a scatter path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
+/// each with floats, 32 with fixed-point word pairs; twice that for a FLIP/PIC blend); the
+/// gather path sums in registers and needs none (one placeholder node).
 fn sums_bytes(path: P2gPath, step: &GpuStep, blocks: u32) -> u64 {
     // A FLIP/PIC blend also sums the momentum without forces: a second vec4 per node.
     let per_node = if step.flip > 0.0 { 32 } else { 16 };
     match path {
         P2gPath::Atomic => u64::from(blocks) * 64 * per_node,
+        P2gPath::Fixed => u64::from(blocks) * 64 * per_node * 2,
         P2gPath::Gather => 16,
     }
 }
@@ -248,7 +277,7 @@ impl GpuSim {
     ) -> Result<GpuSim, SimSetupError> {
         if pages.count > 1 && path == P2gPath::Gather {
             return Err(SimSetupError::Gpu(GpuError::Failed(format!(
-                "{} particles span {} storage bindings of {}; the gather P2G path (deterministic) needs them in one: use the atomic path, or fewer particles",
+                "{} particles span {} storage bindings of {}; the gather P2G path needs them in one: use the fixed-point or atomic path, or fewer particles",
                 particles.len(),
                 pages.count,
                 gpu.describe()
@@ -261,12 +290,12 @@ impl GpuSim {
             ))));
         }
         let separation = params.separation != super::Separation::None;
-        if separation && path == P2gPath::Atomic {
-            return Err(SimSetupError::Gpu(GpuError::Failed(
+        if separation && path != P2gPath::Gather {
+            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
                 "two-field separation (simulation.separation) runs on the gather P2G path; \
-                 the atomic path has one velocity field per node"
-                    .into(),
-            )));
+                 the {} path has one velocity field per node",
+                path.name()
+            ))));
         }
         let texture_limit = gpu.limits.max_texture_dimension_2d;
         if texture_limit < GRID_TEXELS_PER_ROW {
@@ -276,9 +305,18 @@ impl GpuSim {
             ))));
         }
         let n = particles.len() as u32;
-        let step = GpuStep::new(grid, materials, params, n)?;
+        let mut step = GpuStep::new(grid, materials, params, n)?;
+        // From the masses as the GPU holds them (f32), so that particles the GPU cannot
+        // tell apart get the same units.
+        let mass = || particles.mass.iter().map(|m| f64::from(*m as f32));
+        step.set_fixed_point(mass().sum(), mass().fold(0.0, f64::max));
         let device = &gpu.device;
-        let passes = Passes::new(device, gpu.executor(), path == P2gPath::Atomic, separation);
+        let scatter = match path {
+            P2gPath::Gather => None,
+            P2gPath::Atomic => Some(Scatter::Float),
+            P2gPath::Fixed => Some(Scatter::Fixed),
+        };
+        let passes = Passes::new(device, gpu.executor(), scatter, separation);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]
@@ -302,7 +340,6 @@ impl GpuSim {
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
         let max_pool_blocks = blocks.min(GridTexture::max_blocks(texture_limit));
         let pool = initial_pool(particles, grid, max_pool_blocks);
-        let mut step = step;
         step.pool_blocks = pool;
         let nn = u64::from(n);
         let buffers = StepBuffers {
@@ -723,6 +760,7 @@ impl GpuSim {
             first_step: (v[2] != 0).then_some(!v[2]),
             active_blocks_max: v[4],
             pool_overflow: v[5],
+            fixed_point_range: v[6],
         })
     }
 

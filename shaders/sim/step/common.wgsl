@@ -86,9 +86,11 @@ struct SimStep {
     // the FLIP share of G2P's velocity (0: APIC or PIC; the grid's velocity change is then
     // neither written nor read)
     flip: f32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // the fixed-point P2G's units, 2^−e kg and 2^−e kg·m/s (p2g_fixed.wgsl), and the speed
+    // under which every particle must stay for its sums to fit
+    mass_exponent: i32,
+    momentum_exponent: i32,
+    speed_bound: f32,
     surface: SurfaceCondition,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
@@ -129,6 +131,16 @@ struct StepConsts {
 }
 
 var<private> consts: StepConsts;
+
+// The fixed-point P2G's scales (p2g_fixed.wgsl, grid_from_sums.wgsl): 2^e as f32, built
+// from its bits so that it is exact (a CPU driver may call a library per lane for ldexp
+// or exp2), for |e| ≤ 126.
+const TWO_TO_32: f32 = 4294967296.0;
+const TWO_TO_MINUS_32: f32 = 2.3283064365386963e-10;
+
+fn power_of_two(e: i32) -> f32 {
+    return bitcast<f32>(u32(e + 127) << 23u);
+}
 
 fn read_consts() {
     consts.lo = step.lo;

@@ -1,5 +1,6 @@
 //! `shaders/sim/step/grid_from_sums.wgsl`: per node of the active blocks: velocity from the
-//! scattered sums, then the grid update (atomic path).
+//! scattered sums (float or fixed-point), then the grid update (atomic and fixed-point
+//! paths).
 
 use crate::gpu::Kernel;
 
@@ -10,10 +11,14 @@ pub(crate) struct GridFromSums {
 }
 
 impl GridFromSums {
-    pub fn new(device: &wgpu::Device) -> Self {
-        let src = include_str!("../../../shaders/sim/step/grid_from_sums.wgsl");
+    /// With `fixed_point`, the sums are `p2g_fixed.wgsl`'s word pairs, else floats.
+    pub fn new(device: &wgpu::Device, fixed_point: bool) -> Self {
+        let src = format!(
+            "const FIXED_POINT: bool = {fixed_point};\n{}",
+            include_str!("../../../shaders/sim/step/grid_from_sums.wgsl")
+        );
         GridFromSums {
-            kernel: step_kernel(device, "sim grid_from_sums", src),
+            kernel: step_kernel(device, "sim grid_from_sums", &src),
         }
     }
 

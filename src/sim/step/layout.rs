@@ -140,7 +140,12 @@ pub struct GpuStep {
     pub pool_blocks: u32,
     /// The FLIP share of G2P's velocity (`Transfer::flip`; 0: none).
     pub flip: f32,
-    pub _pad: [u32; 3],
+    /// The fixed-point P2G's units: 2^−`mass_exponent` kg and 2^−`momentum_exponent` kg·m/s
+    /// ([`GpuStep::set_fixed_point`]).
+    pub mass_exponent: i32,
+    pub momentum_exponent: i32,
+    /// The speed every particle must stay under for the fixed-point sums to fit (m/s).
+    pub speed_bound: f32,
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
@@ -225,7 +230,9 @@ impl GpuStep {
             num_kinematic: 0,
             pool_blocks: 0,
             flip: params.transfer.flip() as f32,
-            _pad: [0; 3],
+            mass_exponent: 0,
+            momentum_exponent: 0,
+            speed_bound: 0.0,
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -259,10 +266,75 @@ impl GpuStep {
     }
 }
 
+/// How many cells a step a particle may cross before the fixed-point P2G refuses it: eight
+/// times what the CFL condition allows at all, so only a run that has already failed
+/// reaches it.
+pub const FIXED_POINT_CELLS_PER_STEP: f64 = 8.0;
+
+/// The most units a fixed-point sum may hold: 2^62, a factor of two under the 64-bit word
+/// pair's range.
+const FIXED_POINT_SUM_LOG2: f64 = 62.0;
+
+/// The most units one particle's contribution may hold: 2^32, so that adding it to a sum
+/// changes the high word only through the low word's carry (an integer atomic less, most
+/// of the time).
+const FIXED_POINT_PART_LOG2: f64 = 32.0;
+
+impl GpuStep {
+    /// The units of the fixed-point P2G (`p2g_fixed.wgsl`) for particles of `total_mass`
+    /// whose heaviest is `max_mass`: the largest powers of two under which one particle's
+    /// contribution stays under 2^32 units and every sum under 2^62. A node's mass sums
+    /// w_ip m_p ≤ m_p over particles, so it is at most the total mass M; each momentum
+    /// component sums w_ip |m_p v_p + a_p d_ip| ≤ w_ip m_p V for particles under the speed
+    /// bound V (the scatter counts and skips the others), so it is at most M V.
+    pub fn set_fixed_point(&mut self, total_mass: f64, max_mass: f64) {
+        let speed_bound = FIXED_POINT_CELLS_PER_STEP * f64::from(self.dx) / f64::from(self.dt);
+        self.speed_bound = speed_bound as f32;
+        self.mass_exponent = fixed_point_exponent(max_mass, total_mass);
+        self.momentum_exponent =
+            fixed_point_exponent(max_mass * speed_bound, total_mass * speed_bound);
+    }
+}
+
+/// The largest e with part · 2^e ≤ 2^32 and sum · 2^e ≤ 2^62, kept where f32 can scale by
+/// it (a massless set of particles gets the top, which nothing is scaled by).
+fn fixed_point_exponent(part: f64, sum: f64) -> i32 {
+    let e = (FIXED_POINT_PART_LOG2 - part.log2()).min(FIXED_POINT_SUM_LOG2 - sum.log2());
+    if e.is_nan() {
+        return 0;
+    }
+    e.floor().clamp(-100.0, 100.0) as i32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::gpu::layout_check::assert_layout;
+
+    #[test]
+    fn fixed_point_units_keep_a_part_under_2_32_and_a_sum_under_2_62() {
+        let mut step = GpuStep::zeroed();
+        step.dx = 0.01;
+        step.dt = 1e-4;
+        // 1e6 particles of 1e-3 kg: the part bounds the exponent.
+        step.set_fixed_point(1e3, 1e-3);
+        let speed = 8.0 * 0.01 / 1e-4;
+        assert!((f64::from(step.speed_bound) - speed).abs() < 1e-3);
+        let scaled = |x: f64, e: i32| x * 2f64.powi(e);
+        for (part, sum, e) in [
+            (1e-3, 1e3, step.mass_exponent),
+            (1e-3 * speed, 1e3 * speed, step.momentum_exponent),
+        ] {
+            assert!(scaled(part, e) <= 2f64.powi(32) && scaled(part, e) > 2f64.powi(31));
+            assert!(scaled(sum, e) <= 2f64.powi(62));
+        }
+        // 2^40 particles: the sum bounds it.
+        step.set_fixed_point(2f64.powi(40), 1.0);
+        assert_eq!(step.mass_exponent, 22);
+        // No particles: nothing to scale.
+        step.set_fixed_point(0.0, 0.0);
+        assert_eq!(step.mass_exponent, 100);
+    }
 
     #[test]
     fn layouts_match_wgsl() {
@@ -294,6 +366,9 @@ mod tests {
                 num_kinematic,
                 pool_blocks,
                 flip,
+                mass_exponent,
+                momentum_exponent,
+                speed_bound,
                 surface,
                 walls,
                 colliders,

@@ -19,9 +19,11 @@
 //! 7. [`G2p`] — velocities, C, F, positions, the material's plasticity (each particle from
 //!    its own field).
 //!
-//! Where the adapter has float atomics, steps 2–5 are instead [`MarkParticles`] (each
-//! particle flags the blocks of its stencil), [`CompactBlocks`], [`P2gScatter`] (each
-//! particle adds to its 27 nodes) and [`GridFromSums`] (the grid update on the active
+//! On the scatter paths steps 2–5 are instead [`MarkParticles`] (each particle flags the
+//! blocks of its stencil), [`CompactBlocks`], a scatter in which each particle adds to its
+//! 27 nodes — [`P2gScatter`] with float atomics (where the adapter has them; the order of
+//! the additions varies) or [`P2gFixed`] with integer atomics on fixed-point sums
+//! (deterministic, every adapter) — and [`GridFromSums`] (the grid update on the active
 //! blocks), and only the first step of a submission runs [`Prepare`]: that path's G2P
 //! leaves the next step's affine term, so later steps need not re-read F, C and the
 //! material for it. [`Passes::list`] is that algorithm; [`Passes::stages`] records it through the
@@ -36,6 +38,7 @@ pub mod layout;
 mod mark_blocks;
 mod mark_particles;
 mod p2g;
+mod p2g_fixed;
 mod p2g_scatter;
 mod prepare;
 mod ridge;
@@ -48,6 +51,7 @@ pub(crate) use grid_from_sums::GridFromSums;
 pub(crate) use mark_blocks::MarkBlocks;
 pub(crate) use mark_particles::MarkParticles;
 pub(crate) use p2g::P2gGather;
+pub(crate) use p2g_fixed::P2gFixed;
 pub(crate) use p2g_scatter::P2gScatter;
 pub(crate) use prepare::Prepare;
 pub(crate) use ridge::Ridge;
@@ -221,7 +225,7 @@ pub(crate) struct Sorted<'a> {
     pub values: &'a wgpu::Buffer,
 }
 
-/// The pipelines of the step; the atomic path's only on adapters with float atomics.
+/// The pipelines of the step; a scatter path's only when the step scatters.
 pub(crate) struct Passes {
     prepare: Prepare,
     sort: RadixSort,
@@ -244,8 +248,45 @@ struct SeparationPasses {
 
 struct AtomicPasses {
     mark: MarkParticles,
-    scatter: P2gScatter,
+    scatter: ScatterPass,
     grid: GridFromSums,
+}
+
+/// How a scatter path's particles add to their nodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Scatter {
+    /// Float atomics ([`P2gScatter`]).
+    Float,
+    /// Integer atomics on fixed-point sums ([`P2gFixed`]).
+    Fixed,
+}
+
+enum ScatterPass {
+    Float(P2gScatter),
+    Fixed(P2gFixed),
+}
+
+impl ScatterPass {
+    fn new(device: &wgpu::Device, scatter: Scatter) -> Self {
+        match scatter {
+            Scatter::Float => ScatterPass::Float(P2gScatter::new(device)),
+            Scatter::Fixed => ScatterPass::Fixed(P2gFixed::new(device)),
+        }
+    }
+
+    fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+        match self {
+            ScatterPass::Float(p) => p.bind(device, b, i),
+            ScatterPass::Fixed(p) => p.bind(device, b, i),
+        }
+    }
+
+    fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
+        match self {
+            ScatterPass::Float(p) => p.record(c, bind, particles),
+            ScatterPass::Fixed(p) => p.record(c, bind, particles),
+        }
+    }
 }
 
 /// The bind groups of [`Passes`] over one set of [`StepBuffers`]; the per-particle passes
@@ -318,14 +359,15 @@ impl StepPass {
 }
 
 impl Passes {
-    /// Compile the passes; the atomic path's with `atomic`, two-field separation's with
-    /// `separation` (on the gather path).
+    /// Compile the passes; a scatter path's with `scatter` (else the gather path's),
+    /// two-field separation's with `separation` (on the gather path).
     pub fn new(
         device: &wgpu::Device,
         executor: Executor,
-        atomic: bool,
+        scatter: Option<Scatter>,
         separation: bool,
     ) -> Passes {
+        let atomic = scatter.is_some();
         Passes {
             prepare: Prepare::new(device),
             sort: RadixSort::new(device, executor),
@@ -335,10 +377,10 @@ impl Passes {
             compact_blocks: CompactBlocks::new(device),
             gather: P2gGather::new(device, separation),
             g2p: G2p::new(device, atomic, separation),
-            atomic: atomic.then(|| AtomicPasses {
+            atomic: scatter.map(|scatter| AtomicPasses {
                 mark: MarkParticles::new(device),
-                scatter: P2gScatter::new(device),
-                grid: GridFromSums::new(device),
+                scatter: ScatterPass::new(device, scatter),
+                grid: GridFromSums::new(device, scatter == Scatter::Fixed),
             }),
             separation: (separation && !atomic).then(|| SeparationPasses {
                 damage_field: DamageField::new(device),
