@@ -87,6 +87,7 @@ fn quick_look(file: &str) -> Run {
             file: data(file),
             cameras: None,
             camera: None,
+            up: None,
         },
         out: Some(std::env::temp_dir().join("splatter-quick-look-test")),
         width: Some(320),
@@ -373,6 +374,7 @@ fn quick_look_from_a_training_camera_draws_the_capture_in_its_own_frame() {
             file: data(PLANT),
             cameras: Some(cameras),
             camera: Some(0),
+            up: None,
         },
         out: Some(dir.path().join("frames")),
         ..RunOptions::default()
