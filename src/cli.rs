@@ -39,6 +39,10 @@ pub(crate) enum Command {
         /// Also render an overview of the upright capture over a labelled ground grid.
         #[arg(long, value_name = "FILE.png")]
         preview: Option<PathBuf>,
+        /// The capture's INRIA 3DGS cameras.json: up is the mean of its cameras' up vectors.
+        /// Default: a cameras.json next to the capture, when there is one.
+        #[arg(long, value_name = "FILE")]
+        cameras: Option<PathBuf>,
     },
     /// Count the pieces of particle point clouds (PLY with x, y, z: `render
     /// --export-particles` files or another solver's): particles closer than the link
@@ -237,6 +241,16 @@ pub(crate) struct RenderArgs {
     /// With --cameras: index of the camera in cameras.json (default 0).
     #[arg(long, requires = "cameras")]
     pub(crate) camera: Option<usize>,
+    /// With --ply: which way is up in the capture (an axis: +x, -x, +y, -y, +z, -z), instead
+    /// of the estimate (docs/captures.md, The up axis).
+    #[arg(
+        long,
+        requires = "ply",
+        conflicts_with = "cameras",
+        value_name = "AXIS",
+        allow_hyphen_values = true
+    )]
+    pub(crate) up: Option<String>,
     /// Continue a killed or failed run in the same output directory: frames already
     /// written are skipped, and a simulation restarts from OUT_DIR/checkpoint.bin (a
     /// checkpoint of another scene, mode or program version is refused).
@@ -276,6 +290,7 @@ impl RenderArgs {
                 file,
                 cameras: self.cameras,
                 camera: self.camera,
+                up: self.up,
             },
             (None, None) => Input::Scene(self.scene),
         };

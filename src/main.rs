@@ -41,7 +41,14 @@ fn run(cli: Cli) -> Result<()> {
             file,
             support_height,
             preview,
-        }) => inspect(cli.backend, &file, support_height, preview.as_deref()),
+            cameras,
+        }) => inspect(
+            cli.backend,
+            &file,
+            support_height,
+            cameras.as_deref(),
+            preview.as_deref(),
+        ),
         Some(Command::Fragments { files, link }) => fragments(&files, link),
         Some(Command::Info) => {
             print!("{}", splatter::gpu::info_report(cli.backend));
@@ -185,18 +192,24 @@ fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
     Ok(())
 }
 
-/// `splatter inspect`: the report, and with `--preview` an overview image.
+/// `splatter inspect`: the report (warnings on stderr), and with `--preview` an overview
+/// image.
 fn inspect(
     backend: Option<BackendChoice>,
     file: &Path,
     support_height: f32,
+    cameras: Option<&Path>,
     preview: Option<&Path>,
 ) -> Result<()> {
-    let (cloud, found, report) = splatter::run::preview::inspect_file(file, support_height)?;
+    let (cloud, found, report) =
+        splatter::run::preview::inspect_file(file, support_height, cameras)?;
     println!("{report}");
+    for w in found.warnings(&file.display().to_string()) {
+        log::warn!("{w}");
+    }
     if let Some(png) = preview {
         let gpu = GpuContext::new(backend)?;
-        splatter::run::preview::write(&gpu, &cloud, &found, png)?;
+        splatter::run::preview::write(&gpu, &cloud, &found.inspection, png)?;
         println!("preview:       {}", png.display());
     }
     Ok(())

@@ -3,14 +3,20 @@
 //! cameras (in its own frame), `up` in scene files, and the fill of an open capture. Data: tests/data/captures (subsets of a real plant capture) and
 //! tests/data/formats (a subset of the Mip-Splatting donut); see their READMEs.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
+use common::cli::{assert_mentions, describe, splatter_ok, stderr_lines, workdir};
 use glam::{Mat3, Quat, Vec3};
 use splatter::render::camera::{look_at_rotation, DEFAULT_NEAR};
 use splatter::render::{cpu, Camera, Splats};
 use splatter::run::{Input, Run, RunOptions};
 use splatter::splat::formats::read_splats;
-use splatter::splat::inspect::{inspect, robust_bounds, UpEvidence};
+use splatter::splat::inspect::{
+    cameras_up, inspect, inspect_with_cameras, robust_bounds, UpEvidence,
+};
+use splatter::splat::ply::{write_ply, PlyFormat};
 use splatter::splat::GaussianCloud;
 
 fn data(path: &str) -> PathBuf {
@@ -87,6 +93,7 @@ fn quick_look(file: &str) -> Run {
             file: data(file),
             cameras: None,
             camera: None,
+            up: None,
         },
         out: Some(std::env::temp_dir().join("splatter-quick-look-test")),
         width: Some(320),
@@ -373,6 +380,7 @@ fn quick_look_from_a_training_camera_draws_the_capture_in_its_own_frame() {
             file: data(PLANT),
             cameras: Some(cameras),
             camera: Some(0),
+            up: None,
         },
         out: Some(dir.path().join("frames")),
         ..RunOptions::default()
@@ -408,4 +416,403 @@ fn scene_with_a_cameras_json_path_draws_the_capture_in_its_own_frame() {
     let psnr = cpu::psnr(&image, &reference);
     println!("scene with cameras_json against the CPU reference: {psnr:.1} dB");
     assert!(psnr >= 40.0, "{psnr:.1} dB against the CPU reference");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Up from the capture's cameras, and a warning when up is a guess
+// ---------------------------------------------------------------------------------------------
+
+/// Cameras posed round the plant as a phone video would be (its author does not distribute
+/// the training cameras; how they were placed: tests/data/captures/make_cameras.py).
+const PLANT_CAMERAS: &str = "captures/plant_cameras.json";
+
+/// A half turn about x: the plant's −y up becomes +y (a proper rotation, not a mirror).
+const FLIP: Mat3 = Mat3::from_cols(Vec3::X, Vec3::NEG_Y, Vec3::NEG_Z);
+
+/// The plant in its own frame (−y up), or turned by [`FLIP`] into a +y-up file.
+fn plant(flipped: bool) -> GaussianCloud {
+    let (mut cloud, _) = read_splats(&data(PLANT)).unwrap();
+    if flipped {
+        assert_eq!(
+            cloud.sh_degree, 0,
+            "higher SH degrees would need rotating too"
+        );
+        let q = Quat::from_mat3(&FLIP);
+        for p in cloud.positions.iter_mut().chain(cloud.normals.iter_mut()) {
+            *p = FLIP * *p;
+        }
+        for r in &mut cloud.rotations {
+            *r = q * *r;
+        }
+    }
+    cloud
+}
+
+/// The plant's cameras (camera-to-world, OpenCV axes) as the fixture holds them, or turned by
+/// [`FLIP`] with the plant.
+fn plant_cameras_json(flipped: bool) -> String {
+    let text = std::fs::read_to_string(data(PLANT_CAMERAS)).unwrap();
+    let mut cams: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
+    if flipped {
+        let turn = |v: &serde_json::Value| -> [f32; 3] {
+            let a: [f32; 3] = serde_json::from_value(v.clone()).unwrap();
+            (FLIP * Vec3::from_array(a)).to_array()
+        };
+        for c in &mut cams {
+            c["position"] = serde_json::json!(turn(&c["position"]));
+            // R' = FLIP · R: each column turned; by rows, rows 1 and 2 negated.
+            let rows: [[f32; 3]; 3] = serde_json::from_value(c["rotation"].clone()).unwrap();
+            let r = Mat3::from_cols_array_2d(&rows).transpose();
+            let turned = (FLIP * r).transpose().to_cols_array_2d();
+            c["rotation"] = serde_json::json!(turned);
+        }
+    }
+    serde_json::to_string(&cams).unwrap()
+}
+
+/// The true up of the plant's file: −y as captured, +y flipped.
+fn true_up(flipped: bool) -> Vec3 {
+    if flipped {
+        FLIP * -Vec3::Y
+    } else {
+        -Vec3::Y
+    }
+}
+
+/// The camera-to-world rotations of a cameras.json text.
+fn rotations(json: &str) -> Vec<Mat3> {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("cameras.json");
+    std::fs::write(&file, json).unwrap();
+    splatter::scene::from_cameras_json(&file, None, None)
+        .unwrap()
+        .iter()
+        .map(|c| c.rotation)
+        .collect()
+}
+
+/// The plant as captured (−y up) and flipped (+y up): with its cameras, up is the true up
+/// (the mean of the cameras' ups within a few degrees of it, snapped to the axis); without
+/// them, no evidence decides, the convention's −y is marked a guess and a warning says so
+/// (the guess is wrong for the flipped file).
+#[test]
+fn the_cameras_give_the_plant_s_up_in_either_frame() {
+    for flipped in [false, true] {
+        let cloud = plant(flipped);
+        let truth = true_up(flipped);
+        let cameras = cameras_up(&rotations(&plant_cameras_json(flipped))).unwrap();
+        let angle = cameras.up.angle_between(truth).to_degrees();
+        println!(
+            "flipped {flipped}: mean up of {} cameras {:.4?}, {angle:.2}° from the true up; spread {:.1}°, agreement {:.3}",
+            cameras.count, cameras.up, cameras.spread_deg, cameras.agreement
+        );
+        assert!(angle < 5.0, "{angle}° from {truth}");
+        let found = inspect_with_cameras(&cloud, Some(cameras));
+        assert_eq!(found.up, truth, "{:?}", found.evidence);
+        assert!(matches!(
+            found.evidence,
+            UpEvidence::Cameras { count: 24, .. }
+        ));
+        assert!(found.guess_warning("plant").is_none());
+
+        let alone = inspect(&cloud);
+        println!("  without cameras: {}", alone.up_text());
+        assert!(alone.is_guess(), "{:?}", alone.evidence);
+        assert_eq!(alone.up, -Vec3::Y, "the convention");
+        let warning = alone.guess_warning("plant").unwrap();
+        assert!(
+            warning.contains("--up") && warning.contains("cameras"),
+            "{warning}"
+        );
+    }
+}
+
+/// The upright-and-framed quick look of the plant, with its cameras.json next to it or
+/// none, and `up` given or not.
+fn quick_look_at(dir: &Path, flipped: bool, cameras: bool, up: Option<&str>) -> Run {
+    let file = dir.join("plant.ply");
+    write_ply(&file, &plant(flipped), PlyFormat::BinaryLittleEndian).unwrap();
+    let json = dir.join("cameras.json");
+    if cameras {
+        std::fs::write(&json, plant_cameras_json(flipped)).unwrap();
+    } else if json.exists() {
+        std::fs::remove_file(&json).unwrap();
+    }
+    Run::prepare(RunOptions {
+        input: Input::Ply {
+            file,
+            cameras: None,
+            camera: None,
+            up: up.map(str::to_string),
+        },
+        out: Some(dir.join("out")),
+        width: Some(320),
+        height: Some(180),
+        ..RunOptions::default()
+    })
+    .unwrap()
+}
+
+/// Heights (world z) of the plant's leaves and of the rest (the pot and soil) in a run's
+/// Gaussians, as means: the leaves are the Gaussians whose colour is clearly green.
+fn leaves_and_pot(run: &Run) -> (f32, f32) {
+    let splats = run.splats().unwrap();
+    let (mut leaves, mut pot) = (Vec::new(), Vec::new());
+    for (i, m) in splats.means.iter().enumerate() {
+        if splats.opacities[i] < 0.1 {
+            continue;
+        }
+        let rgb =
+            Vec3::from_slice(&splats.sh[3 * i..3 * i + 3]) * splatter::splat::codec::SH_C0 + 0.5;
+        let green = rgb.y > 1.1 * rgb.x && rgb.y > 1.1 * rgb.z;
+        if green { &mut leaves } else { &mut pot }.push(m.z);
+    }
+    let mean = |v: &[f32]| v.iter().sum::<f32>() / v.len() as f32;
+    (mean(&leaves), mean(&pot))
+}
+
+/// The cameras' mean height (world z) in a quick look, against the plant's robust centre:
+/// positive when they look down on it.
+fn cameras_above(run: &Run, flipped: bool) -> f32 {
+    let (m, t) = run.scene().objects[0].transform.affine();
+    let cams: Vec<serde_json::Value> = serde_json::from_str(&plant_cameras_json(flipped)).unwrap();
+    let mean: Vec3 = cams
+        .iter()
+        .map(|c| {
+            let p: [f32; 3] = serde_json::from_value(c["position"].clone()).unwrap();
+            m * Vec3::from_array(p) + t
+        })
+        .sum::<Vec3>()
+        / cams.len() as f32;
+    let (lo, hi) = robust_bounds(&run.splats().unwrap().means);
+    mean.z - 0.5 * (lo.z + hi.z)
+}
+
+/// Head above feet: the quick look stands the plant with its leaves above its pot and its
+/// cameras above it, whichever way up its file is, when its cameras.json lies next to it
+/// (said in a note) or `--up` names the axis; without either the flipped plant stands on
+/// its head, and the run warns that its up is a guess.
+#[test]
+fn quick_look_stands_the_plant_leaves_up_from_its_cameras() {
+    let dir = tempfile::tempdir().unwrap();
+    for flipped in [false, true] {
+        let run = quick_look_at(dir.path(), flipped, true, None);
+        let (leaves, pot) = leaves_and_pot(&run);
+        let above = cameras_above(&run, flipped);
+        println!("flipped {flipped}, cameras: leaves at z {leaves:.3}, pot at {pot:.3}; cameras {above:.3} above the centre");
+        assert!(
+            leaves > pot + 0.1,
+            "upside down: leaves {leaves}, pot {pot}"
+        );
+        assert!(above > 0.2, "the cameras should look down on it: {above}");
+        let scene = run.scene();
+        assert!(scene.up_warnings.is_empty(), "{:?}", scene.up_warnings);
+        assert_eq!(scene.up_notes.len(), 1, "{:?}", scene.up_notes);
+        assert!(
+            scene.up_notes[0].contains("found next to the capture"),
+            "{}",
+            scene.up_notes[0]
+        );
+    }
+    let guessed = quick_look_at(dir.path(), true, false, None);
+    let (leaves, pot) = leaves_and_pot(&guessed);
+    println!("flipped, no cameras: leaves at z {leaves:.3}, pot at {pot:.3}");
+    assert!(
+        leaves < pot,
+        "the convention's guess is wrong for a +y-up file"
+    );
+    let warnings = &guessed.scene().up_warnings;
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(warnings[0].contains("is a guess"), "{}", warnings[0]);
+
+    let given = quick_look_at(dir.path(), true, false, Some("+y"));
+    let (leaves, pot) = leaves_and_pot(&given);
+    println!("flipped, --up +y: leaves at z {leaves:.3}, pot at {pot:.3}");
+    assert!(leaves > pot + 0.1, "--up +y: leaves {leaves}, pot {pot}");
+    assert!(given.scene().up_warnings.is_empty());
+}
+
+/// A scene names the capture's cameras (`{"auto": {"cameras": FILE}}`, any file name): the
+/// flipped plant is turned by its +y, and the note names the file.
+#[test]
+fn a_scene_takes_up_from_the_cameras_it_names() {
+    let dir = tempfile::tempdir().unwrap();
+    write_ply(
+        &dir.path().join("plant.ply"),
+        &plant(true),
+        PlyFormat::BinaryLittleEndian,
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("views.json"), plant_cameras_json(true)).unwrap();
+    let text = r#"{"output": {"width": 32, "height": 24, "frames": 1},
+        "camera": {"fov_y_deg": 40, "path": {"type": "orbit", "target": [0, 0, 0], "radius": 3}},
+        "objects": [{"ply": "plant.ply", "transform": {"up": {"auto": {"cameras": "views.json"}}}}]}"#;
+    let scene = splatter::scene::parse(text, "scene.json", dir.path()).unwrap();
+    let turned = scene.objects[0].transform.rotation() * Vec3::Y;
+    println!("{:?}; +y turned to {turned:?}", scene.up_notes);
+    assert!(turned.distance(Vec3::Z) < 1e-5, "{turned:?}");
+    assert!(scene.up_warnings.is_empty(), "{:?}", scene.up_warnings);
+    assert!(
+        scene.up_notes.len() == 1 && scene.up_notes[0].contains("views.json"),
+        "{:?}",
+        scene.up_notes
+    );
+}
+
+/// The flipped (+y-up) plant written to `dir/plant.ply`, its cameras to `dir/views.json`.
+fn flipped_plant_in(dir: &Path) {
+    write_ply(
+        &dir.join("plant.ply"),
+        &plant(true),
+        PlyFormat::BinaryLittleEndian,
+    )
+    .unwrap();
+    std::fs::write(dir.join("views.json"), plant_cameras_json(true)).unwrap();
+}
+
+/// stderr lines that say up is a guess.
+fn guess_lines(out: &std::process::Output) -> Vec<String> {
+    stderr_lines(out)
+        .into_iter()
+        .filter(|l| l.contains("is a guess"))
+        .collect()
+}
+
+/// `splatter inspect` on the +y-up plant: without cameras it prints the convention's −y as
+/// a guess and one warning line naming the ways to decide; with `--cameras`, or a
+/// cameras.json next to the capture (said in the report), up is +y and nothing is warned.
+#[test]
+fn inspect_takes_up_from_the_cameras_and_warns_on_a_guess() {
+    let dir = workdir();
+    flipped_plant_in(dir.path());
+    let out = splatter_ok(dir.path(), &["inspect", "plant.ply"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("up:            \"-y\", from the camera convention's -y, a guess"),
+        "{}",
+        describe(&out)
+    );
+    let lines = stderr_lines(&out);
+    assert_eq!(lines.len(), 1, "{}", describe(&out));
+    println!("{}", lines[0]);
+    assert_mentions(
+        &lines[0],
+        &[
+            "plant.ply",
+            "is a guess",
+            "--up AXIS",
+            "\"up\": \"+y\"",
+            "--cameras",
+        ],
+    );
+
+    let out = splatter_ok(
+        dir.path(),
+        &["inspect", "plant.ply", "--cameras", "views.json"],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    println!("{stdout}");
+    assert!(
+        stdout.contains("cameras:       views.json (24 cameras)\n"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("up:            \"+y\", from the mean up of 24 cameras"),
+        "{stdout}"
+    );
+    assert!(stderr_lines(&out).is_empty(), "{}", describe(&out));
+
+    std::fs::copy(
+        dir.path().join("views.json"),
+        dir.path().join("cameras.json"),
+    )
+    .unwrap();
+    let out = splatter_ok(dir.path(), &["inspect", "plant.ply"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("(24 cameras, found next to the capture)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("up:            \"+y\""), "{stdout}");
+    assert!(stderr_lines(&out).is_empty(), "{}", describe(&out));
+}
+
+/// `render --ply` on the +y-up plant warns that its up is a guess; `--up +y` decides it and
+/// the warning goes; a cameras.json next to the capture decides it too, said in a note.
+#[test]
+fn render_ply_up_overrides_the_guess() {
+    let dir = workdir();
+    flipped_plant_in(dir.path());
+    let args = |out: &'static str| {
+        vec![
+            "render",
+            "--ply",
+            "plant.ply",
+            "--out",
+            out,
+            "--frames",
+            "0..1",
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ]
+    };
+    let out = splatter_ok(dir.path(), &args("a"));
+    assert_eq!(guess_lines(&out).len(), 1, "{}", describe(&out));
+
+    let out = splatter_ok(dir.path(), &[args("b"), vec!["--up", "+y"]].concat());
+    assert!(guess_lines(&out).is_empty(), "{}", describe(&out));
+
+    std::fs::copy(
+        dir.path().join("views.json"),
+        dir.path().join("cameras.json"),
+    )
+    .unwrap();
+    let out = splatter_ok(dir.path(), &args("c"));
+    assert!(guess_lines(&out).is_empty(), "{}", describe(&out));
+    let note = stderr_lines(&out)
+        .into_iter()
+        .find(|l| l.contains("found next to the capture"))
+        .unwrap_or_else(|| panic!("no note on the cameras:\n{}", describe(&out)));
+    assert_mentions(&note, &["up \"+y\"", "24 cameras", "cameras.json"]);
+}
+
+/// `inspect --preview` marks a guess in the image: the plant (−y up) with and without its
+/// cameras is stood up the same way, and the two previews differ only in the band of the
+/// label that says up is a guess.
+#[test]
+fn inspect_preview_marks_a_guess() {
+    let dir = workdir();
+    std::fs::copy(data(PLANT), dir.path().join("plant.spz")).unwrap();
+    std::fs::copy(data(PLANT_CAMERAS), dir.path().join("views.json")).unwrap();
+    splatter_ok(
+        dir.path(),
+        &["inspect", "plant.spz", "--preview", "guess.png"],
+    );
+    splatter_ok(
+        dir.path(),
+        &[
+            "inspect",
+            "plant.spz",
+            "--cameras",
+            "views.json",
+            "--preview",
+            "decided.png",
+        ],
+    );
+    let read = |name: &str| image::open(dir.path().join(name)).unwrap().to_rgb8();
+    let (guess, decided) = (read("guess.png"), read("decided.png"));
+    let rows: Vec<u32> = guess
+        .enumerate_pixels()
+        .filter(|(x, y, p)| decided.get_pixel(*x, *y) != *p)
+        .map(|(_, y, _)| y)
+        .collect();
+    let (top, bottom) = (rows.iter().min(), rows.iter().max());
+    println!("{} pixels differ, rows {top:?}..={bottom:?}", rows.len());
+    assert!(rows.len() > 200, "no mark of the guess");
+    assert!(
+        rows.iter().all(|y| (30..70).contains(y)),
+        "rows {top:?}..={bottom:?}"
+    );
 }

@@ -415,6 +415,96 @@ fn zero_width_on_command_line_with_ply() {
 // ---------------------------------------------------------------------------------------------
 
 #[test]
+fn up_axis_not_an_axis() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    let out = splatter(
+        dir.path(),
+        &[
+            "render", "--ply", "tiny.ply", "--up", "sideways", "--out", "frames",
+        ],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["--up", "sideways", "+x", "-z"]);
+}
+
+#[test]
+fn inspect_cameras_missing_or_malformed() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    let out = splatter(
+        dir.path(),
+        &["inspect", "tiny.ply", "--cameras", "nope.json"],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["nope.json"]);
+    write(dir.path(), "bad.json", r#"[{"width": 64}]"#);
+    let out = splatter(
+        dir.path(),
+        &["inspect", "tiny.ply", "--cameras", "bad.json"],
+    );
+    let line = expect_error(&out);
+    assert_mentions(&line, &["bad.json", "height"]);
+}
+
+/// A `cameras.json` next to a capture that is not an INRIA cameras file (another tool's of
+/// that name) is left unused, in one warning line, rather than failing the inspection.
+#[test]
+fn unreadable_cameras_json_next_to_a_capture_is_not_used() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    write(dir.path(), "cameras.json", r#"{"frames": []}"#);
+    let out = splatter_ok(dir.path(), &["inspect", "tiny.ply"]);
+    let lines: Vec<String> = stderr_lines(&out)
+        .into_iter()
+        .filter(|l| l.contains("was not used"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{}", describe(&out));
+    assert_mentions(&lines[0], &["tiny.ply", "cameras.json"]);
+}
+
+#[test]
+fn scene_up_cameras_missing_or_on_a_procedural_object() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "tiny.ply", 8);
+    let object = r#"{"ply": "tiny.ply", "transform": {"up": {"auto": {"cameras": "nope.json"}}}}"#;
+    write(
+        dir.path(),
+        "s.json",
+        &scene_json(64, 1, "50", &format!("[{object}]")),
+    );
+    let line = expect_error(&splatter(dir.path(), &["render", "s.json"]));
+    assert_mentions(
+        &line,
+        &[
+            "s.json",
+            "objects[0].transform.up.auto.cameras",
+            "nope.json",
+        ],
+    );
+
+    write(dir.path(), "cameras.json", CAMERAS_JSON);
+    write(
+        dir.path(),
+        "p.json",
+        &sphere_with_transform(r#"{"up": {"auto": {"cameras": "cameras.json"}}}"#),
+    );
+    let line = expect_error(&splatter(dir.path(), &["render", "p.json"]));
+    assert_mentions(
+        &line,
+        &["objects[0].transform.up.auto.cameras", "procedural"],
+    );
+
+    write(
+        dir.path(),
+        "k.json",
+        &sphere_with_transform(r#"{"up": {"auto": {"camera": "cameras.json"}}}"#),
+    );
+    let line = expect_error(&splatter(dir.path(), &["render", "k.json"]));
+    assert_mentions(&line, &["k.json", "up"]);
+}
+
+#[test]
 fn camera_index_out_of_range() {
     let dir = workdir();
     write_tiny_ply(dir.path(), "tiny.ply", 8);

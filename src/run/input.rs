@@ -66,7 +66,14 @@ pub(super) fn load_scene(file: Option<&Path>, opts: &RunOptions) -> Result<(Scen
     for w in scene.camera_frame_warnings() {
         log::warn!("{w}");
     }
+    log_up_warnings(&scene);
     Ok((scene, path))
+}
+
+fn log_up_warnings(scene: &Scene) {
+    for w in &scene.up_warnings {
+        log::warn!("{w}");
+    }
 }
 
 /// The scene, its camera path and its Gaussians.
@@ -76,7 +83,8 @@ pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, Bui
             file,
             cameras,
             camera,
-        } => quick_look(opts, file, cameras.as_deref(), *camera)?,
+            up,
+        } => quick_look(opts, file, cameras.as_deref(), *camera, up.as_deref())?,
         Input::Scene(file) => {
             let (scene, path) = load_scene(file.as_deref(), opts)?;
             let (splats, report) = scene.build_splats()?;
@@ -90,7 +98,8 @@ pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, Bui
     Ok((scene, path, splats, report))
 }
 
-/// `--ply FILE`: the capture alone, stood upright and framed by an orbit round its robust
+/// `--ply FILE`: the capture alone, stood upright (on `up`, else on the estimate, which
+/// takes a `cameras.json` next to the capture) and framed by an orbit round its robust
 /// bounds (docs/captures.md), or seen from a camera of an INRIA `cameras.json`. Those
 /// cameras were posed in the capture's own frame (the trainer's), so with them the
 /// capture is drawn untouched: standing it upright would move it out of their view.
@@ -99,11 +108,15 @@ fn quick_look(
     ply: &Path,
     cameras: Option<&Path>,
     camera: Option<usize>,
+    up: Option<&str>,
 ) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
-    let transform = if cameras.is_some() {
-        "{}"
-    } else {
-        r#"{"up": "auto"}"#
+    if let Some(axis) = up.filter(|a| crate::splat::inspect::axis_vector(a).is_none()) {
+        bail!("--up {axis:?}: expected an axis: +x, -x, +y, -y, +z or -z");
+    }
+    let transform = match (cameras, up) {
+        (Some(_), _) => "{}".to_string(),
+        (None, Some(axis)) => format!(r#"{{"up": {}}}"#, serde_json::to_string(axis)?),
+        (None, None) => r#"{"up": "auto"}"#.to_string(),
     };
     let text = format!(
         r#"{{"output": {{"width": {w}, "height": {h}, "frames": 60}},
@@ -120,6 +133,7 @@ fn quick_look(
     let mut scene = scene::parse(&text, &format!("--ply {}", ply.display()), Path::new("."))?;
     scene.name = stem;
     scene.with_overrides(opts.out.clone(), None, None)?;
+    log_up_warnings(&scene);
     let (splats, report) = scene.build_splats()?;
     let path = match cameras {
         Some(file) => {

@@ -42,12 +42,14 @@ use crate::scene::{BuildReport, CameraPath, Scene};
 pub enum Input {
     /// A scene file, or the embedded default scene (`None`).
     Scene(Option<PathBuf>),
-    /// A quick look at a capture: an orbit framing its bounds, or a camera of an INRIA
-    /// `cameras.json` (index `camera`, default 0).
+    /// A quick look at a capture: an orbit framing its bounds, stood upright (on `up`, a
+    /// signed axis name, else the estimate), or a camera of an INRIA `cameras.json` (index
+    /// `camera`, default 0).
     Ply {
         file: PathBuf,
         cameras: Option<PathBuf>,
         camera: Option<usize>,
+        up: Option<String>,
     },
     /// Render-only: each frame's Gaussians from `dir/frame_NNNNN.ply` (as written by
     /// `--export-ply`); the scene gives the camera path and output settings.

@@ -5,13 +5,13 @@
 
 use std::path::Path;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use glam::{Mat3, Quat, Vec3};
 
 use crate::gpu::GpuContext;
 use crate::output::text::{draw_labels, Label};
 use crate::render::{Camera, GpuRenderer, Splats};
-use crate::scene::CameraPath;
+use crate::scene::{CameraPath, CaptureUp};
 use crate::splat::inspect::{upright_rotation, Inspection};
 use crate::splat::GaussianCloud;
 
@@ -19,14 +19,19 @@ const WIDTH: u32 = 1280;
 const HEIGHT: u32 = 720;
 const BACKGROUND: Vec3 = Vec3::new(0.08, 0.08, 0.1);
 
-/// Read and inspect a capture: the cloud, the inspection and the report `splatter inspect`
-/// prints (the suggested transform for a support at `support_height`).
+/// Read and inspect a capture with its cameras (`cameras`, else a `cameras.json` next to
+/// it): the cloud, what was found and the report `splatter inspect` prints (the suggested
+/// transform for a support at `support_height`).
 pub fn inspect_file(
     file: &Path,
     support_height: f32,
-) -> Result<(GaussianCloud, Inspection, String)> {
+    cameras: Option<&Path>,
+) -> Result<(GaussianCloud, CaptureUp, String)> {
     let (cloud, read) = crate::splat::formats::read_splats(file)?;
-    let found = crate::splat::inspect::inspect(&cloud);
+    // Only a named cameras file can fail.
+    let found = crate::scene::inspect_capture(&cloud, file, cameras).with_context(|| {
+        cameras.map_or_else(String::new, |c| format!("--cameras {}", c.display()))
+    })?;
     let mut report = format!(
         "file:          {} ({} {})\n",
         file.display(),
@@ -39,9 +44,12 @@ pub fn inspect_file(
             read.skipped_nonfinite, read.skipped_degenerate
         ));
     }
-    report.push_str(&found.to_string());
+    if let Some(c) = found.cameras_text() {
+        report.push_str(&format!("cameras:       {c}\n"));
+    }
+    report.push_str(&found.inspection.to_string());
     if support_height != 0.0 {
-        let t = found.placement(support_height);
+        let t = found.inspection.placement(support_height);
         report.push_str(&format!(
             "\n               with the support at z = {support_height}: translate [{:.4}, {:.4}, {:.4}]",
             t.x, t.y, t.z
@@ -76,7 +84,16 @@ pub fn write(
     let mut renderer = GpuRenderer::new(gpu);
     renderer.upload(gpu, &splats)?;
     let mut image = renderer.render(gpu, &camera, BACKGROUND)?;
-    let labels = grid.labels(&camera);
+    let mut labels = grid.labels(&camera);
+    if found.is_guess() {
+        labels.push(Label {
+            x: 16,
+            y: 36,
+            text: "up is a guess (the camera convention's -y): if the capture stands on its head, give its cameras or an axis"
+                .into(),
+            color: [255, 170, 60],
+        });
+    }
     draw_labels(&mut image.rgba, image.width, image.height, 16, &labels);
     crate::output::write_png(png, image.width, image.height, &image.rgba)?;
     Ok(())

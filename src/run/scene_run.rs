@@ -87,6 +87,9 @@ pub(super) fn execute(
         None => P2gPath::best(gpu),
     };
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
+    for note in &scene.up_notes {
+        on_event(Event::Note(note.clone()));
+    }
     on_event(Event::Note(format!(
         "scene: {} Gaussians, {}×{}, frames {}..{} → {}",
         splats.len(),

@@ -3,36 +3,10 @@
 
 use rayon::prelude::*;
 
-use super::{one_line, ObjectSpec, Scene, SceneError, UpSpec};
+use super::{one_line, ObjectSpec, Scene, SceneError};
 use crate::render::Splats;
 
 impl Scene {
-    /// Estimate `transform.up` of every object that says `"auto"`: captures are read and
-    /// inspected (`splat::inspect`); procedural objects are z-up already.
-    pub fn resolve_up(&mut self) -> Result<(), SceneError> {
-        for index in 0..self.objects.len() {
-            let obj = &self.objects[index];
-            if !obj.transform.up.as_ref().is_some_and(UpSpec::is_auto) {
-                continue;
-            }
-            let up = match &obj.ply {
-                Some(file) => {
-                    let (cloud, _) = crate::splat::formats::read_splats(&self.base_dir.join(file))
-                        .map_err(|e| SceneError::Object {
-                            origin: self.origin.clone(),
-                            index,
-                            name: obj.display_name(index),
-                            message: one_line(&e.to_string()),
-                        })?;
-                    crate::splat::inspect::inspect(&cloud).up
-                }
-                None => glam::Vec3::Z,
-            };
-            self.objects[index].transform.resolved_up = Some(up);
-        }
-        Ok(())
-    }
-
     /// Load or generate every object, place it with its transform and gather all Gaussians.
     pub fn build_splats(&self) -> Result<(Splats, BuildReport), SceneError> {
         let built: Vec<(Splats, ObjectReport)> = self

@@ -18,9 +18,11 @@ pub mod quality;
 pub mod regions;
 pub mod simulation;
 pub mod surface;
+mod up;
 mod validate;
 
 pub use build::{BuildReport, ObjectReport};
+pub use up::{cameras_next_to, inspect_capture, CaptureUp};
 pub(crate) use validate::{mat3_from_rows, rotation_problem};
 
 use std::fmt::Display;
@@ -157,6 +159,13 @@ pub struct Scene {
     /// is `out/<name>`.
     #[serde(skip)]
     pub name: String,
+    /// How each `"up": "auto"` was decided, said when the scene runs ([`Scene::resolve_up`]).
+    #[serde(skip)]
+    pub up_notes: Vec<String>,
+    /// An `"up": "auto"` that is only a guess, or a `cameras.json` next to a capture that
+    /// could not be read: one line each.
+    #[serde(skip)]
+    pub up_warnings: Vec<String>,
 }
 
 fn default_fps() -> f32 {
@@ -335,8 +344,10 @@ pub struct ObjectSpec {
 #[serde(deny_unknown_fields)]
 pub struct TransformSpec {
     /// Which way is up in the object's own frame, turned to +z before `rotate_deg`:
-    /// `"auto"` (estimated from the capture; `splatter inspect` shows the evidence), a
-    /// signed axis (`"+x"`, `"-y"`, …) or a vector [x, y, z]. Default: the object's +z.
+    /// `"auto"` (estimated from the capture and, when there is one, the `cameras.json` next
+    /// to it; `splatter inspect` shows the evidence), `{"auto": {"cameras": FILE}}` (from the
+    /// capture's cameras in FILE, relative to the scene), a signed axis (`"+x"`, `"-y"`, …)
+    /// or a vector [x, y, z]. Default: the object's +z.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub up: Option<UpSpec>,
     /// `up: "auto"` as estimated when the scene was loaded ([`Scene::resolve_up`]).
@@ -379,15 +390,33 @@ impl Scale {
     }
 }
 
-/// `transform.up`: `"auto"`, a signed axis name, or a vector.
+/// `transform.up`: `"auto"`, `{"auto": {"cameras": FILE}}`, a signed axis name, or a
+/// vector.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(
     untagged,
-    expecting = "`up`: \"auto\", an axis such as \"-y\", or an array of 3 numbers"
+    expecting = "`up`: \"auto\", {\"auto\": {\"cameras\": \"cameras.json\"}}, an axis such as \"-y\", or an array of 3 numbers"
 )]
 pub enum UpSpec {
     Named(String),
     Vector([f32; 3]),
+    Auto(AutoUpSpec),
+}
+
+/// `{"auto": {…}}`: up estimated as for `"auto"`, with what is given here.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AutoUpSpec {
+    pub auto: AutoUp,
+}
+
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct AutoUp {
+    /// The capture's INRIA 3DGS `cameras.json` (relative to the scene file): up is the mean
+    /// of its cameras' up vectors. Default: a `cameras.json` found next to the capture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cameras: Option<PathBuf>,
 }
 
 impl UpSpec {
@@ -396,11 +425,20 @@ impl UpSpec {
         match self {
             UpSpec::Named(n) => crate::splat::inspect::axis_vector(n),
             UpSpec::Vector(v) => Vec3::from_array(*v).try_normalize(),
+            UpSpec::Auto(_) => None,
         }
     }
 
     pub fn is_auto(&self) -> bool {
-        matches!(self, UpSpec::Named(n) if n == "auto")
+        matches!(self, UpSpec::Named(n) if n == "auto") || matches!(self, UpSpec::Auto(_))
+    }
+
+    /// The cameras file an auto up names.
+    pub fn auto_cameras(&self) -> Option<&Path> {
+        match self {
+            UpSpec::Auto(a) => a.auto.cameras.as_deref(),
+            _ => None,
+        }
     }
 }
 

@@ -348,6 +348,9 @@ impl Scene {
         let t = &obj.transform;
         check_finite3(o, &f("transform.translate"), t.translate)?;
         check_finite3(o, &f("transform.rotate_deg"), t.rotate_deg)?;
+        if let Some(cameras) = t.up.as_ref().and_then(UpSpec::auto_cameras) {
+            self.check_up_cameras(i, obj, cameras)?;
+        }
         if let Some(up) = &t.up {
             if !up.is_auto() && up.vector().is_none() {
                 let value = serde_json::to_string(up).unwrap_or_default();
@@ -370,6 +373,36 @@ impl Scene {
                 f("transform.scale"),
                 value,
                 "finite scale factors > 0",
+            ));
+        }
+        Ok(())
+    }
+
+    /// `transform.up.auto.cameras`: an existing file, for a capture (a procedural object is
+    /// z-up already).
+    fn check_up_cameras(
+        &self,
+        i: usize,
+        obj: &ObjectSpec,
+        cameras: &Path,
+    ) -> Result<(), SceneError> {
+        let field = format!("objects[{i}].transform.up.auto.cameras");
+        let value = format!("{:?}", cameras.display().to_string());
+        if obj.ply.is_none() {
+            return Err(SceneError::invalid(
+                &self.origin,
+                field,
+                value,
+                "cameras only for a capture (`ply`): a procedural object is z-up",
+            ));
+        }
+        let full = self.base_dir.join(cameras);
+        if cameras.as_os_str().is_empty() || !full.is_file() {
+            return Err(SceneError::invalid(
+                &self.origin,
+                field,
+                value,
+                format!("an existing cameras.json ({} not found)", full.display()),
             ));
         }
         Ok(())

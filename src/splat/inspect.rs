@@ -3,7 +3,12 @@
 //! support under the object and the transform that stands it upright on a chosen height.
 //!
 //! Captures come in whatever frame their reconstruction chose (COLMAP's is y-down, many
-//! are y-up, none is guaranteed z-up), so the up axis is estimated from the geometry:
+//! are y-up, none is guaranteed z-up), so the up axis is estimated, from the first of these
+//! that decides:
+//! 0. **The capture's cameras**, when they are known: people film with the camera upright,
+//!    so the mean of the cameras' up vectors is the world's up (nerfstudio's
+//!    `auto_orient_and_center_poses`, method `up`). Each camera's pitch tilts its up towards
+//!    or away from the object; round an object those tilts cancel in the mean.
 //! 1. **A support plane**: the dominant plane of the robust core (RANSAC), when it holds a
 //!    good share of the Gaussians and nearly all others lie on one side of it (a table or
 //!    floor under the object). Up is its normal, towards the object.
@@ -12,12 +17,13 @@
 //!    Cameras circle an object from above, so its top is seen from every view and densely
 //!    reconstructed while the side it stood on was never seen: the direction with the
 //!    clearly largest difference is up.
-//! 3. **The camera convention**: when neither decides, −y (COLMAP's and OpenCV's frames
-//!    point y down the image, so the first camera's −y is the world's up).
+//! 3. **The camera convention**: when none decides, −y (COLMAP's and OpenCV's frames
+//!    point y down the image, so the first camera's −y is the world's up). This is a guess,
+//!    wrong for every capture written y-up, and [`Inspection::guess_warning`] says so.
 //!
-//! All three can be wrong for a given capture (an object photographed from below, a
-//! capture whose densest layer is its base); the report prints the evidence and the
-//! preview shows the result, and a scene can name the axis instead (`"up": "+z"`).
+//! Each can be wrong for a given capture (cameras held sideways, an object photographed
+//! from below, a capture whose densest layer is its base); the report prints the evidence
+//! and the preview shows the result, and a scene can name the axis instead (`"up": "+z"`).
 
 use glam::{Mat3, Vec3};
 
@@ -50,13 +56,55 @@ impl Spread {
 /// How the up axis was decided.
 #[derive(Clone, Debug, PartialEq)]
 pub enum UpEvidence {
+    /// The mean up of `count` cameras, whose ups spread `spread_deg` (RMS) about it.
+    Cameras { count: usize, spread_deg: f32 },
     /// The normal of a support plane holding `share` of the core's Gaussians.
     SupportPlane { share: f32 },
     /// A seen top: (share in the highest 5%) − (share in the lowest 5%) along up, and the
     /// next best direction's score.
     SeenTop { score: f32, runner_up: f32 },
-    /// Neither decided; the camera convention's −y.
+    /// None decided; the camera convention's −y, a guess.
     Convention,
+}
+
+/// What a capture's cameras say about up.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CamerasUp {
+    /// The mean of the cameras' up vectors, normalised.
+    pub up: Vec3,
+    pub count: usize,
+    /// The length of that mean before normalising: 1 when every camera's up is the same, 0
+    /// when they cancel (cameras rolled every way, or all looking straight down).
+    pub agreement: f32,
+    /// The RMS angle between each camera's up and their mean, in degrees.
+    pub spread_deg: f32,
+}
+
+/// The least [`CamerasUp::agreement`] with which the cameras decide: an orbit pitched
+/// 70° down on average still reaches it, cameras held every which way do not.
+pub const CAMERAS_AGREEMENT: f32 = 0.3;
+
+/// The cameras' up from their camera-to-world rotations (OpenCV axes: x right, y down the
+/// image, z forward, so a camera's up in the world is −y, the negated second column).
+/// None without cameras, or when their ups cancel exactly.
+pub fn cameras_up(camera_to_world: &[Mat3]) -> Option<CamerasUp> {
+    let ups: Vec<Vec3> = camera_to_world
+        .iter()
+        .filter_map(|r| (-r.y_axis).try_normalize())
+        .collect();
+    let sum: Vec3 = ups.iter().sum();
+    let up = sum.try_normalize()?;
+    let mean_square = ups
+        .iter()
+        .map(|u| u.dot(up).clamp(-1.0, 1.0).acos().powi(2))
+        .sum::<f32>()
+        / ups.len() as f32;
+    Some(CamerasUp {
+        up,
+        count: ups.len(),
+        agreement: sum.length() / ups.len() as f32,
+        spread_deg: mean_square.sqrt().to_degrees(),
+    })
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -74,6 +122,8 @@ pub struct Inspection {
     /// The estimated up direction (a unit vector; an axis when it is within 10° of one).
     pub up: Vec3,
     pub evidence: UpEvidence,
+    /// What the capture's cameras said, when they were given (whether or not they decided).
+    pub cameras: Option<CamerasUp>,
     /// The seen-top score of each signed axis: +x, −x, +y, −y, +z, −z.
     pub axis_scores: [f32; 6],
     /// The support's height along `up`: the plane's, or the 1st percentile of the core's
@@ -117,7 +167,13 @@ pub fn upright_rotation(up: Vec3) -> Mat3 {
     Mat3::from_quat(glam::Quat::from_rotation_arc(up, Vec3::Z))
 }
 
+/// [`inspect_with_cameras`] without cameras.
 pub fn inspect(cloud: &GaussianCloud) -> Inspection {
+    inspect_with_cameras(cloud, None)
+}
+
+/// Inspect a capture whose cameras said `cameras` about its up (see [`cameras_up`]).
+pub fn inspect_with_cameras(cloud: &GaussianCloud, cameras: Option<CamerasUp>) -> Inspection {
     let n = cloud.len();
     let bounds = cloud.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
     let robust = robust_bounds(&cloud.positions);
@@ -137,7 +193,7 @@ pub fn inspect(cloud: &GaussianCloud) -> Inspection {
         .collect();
     let axis_scores = AXES.map(|a| seen_top_score(&core, axis_vector(a).unwrap_or(Vec3::Z)));
     let plane = support_plane(&core, size.length());
-    let (up, evidence) = estimate_up(plane, &axis_scores);
+    let (up, evidence) = estimate_up(cameras, plane, &axis_scores);
     let mut heights: Vec<f32> = core.iter().map(|p| p.dot(up)).collect();
     heights.sort_by(f32::total_cmp);
     let support = match (&evidence, heights.is_empty()) {
@@ -158,6 +214,7 @@ pub fn inspect(cloud: &GaussianCloud) -> Inspection {
         scale: Spread::of(cloud.scales.iter().map(|s| s.max_element()).collect()),
         up,
         evidence,
+        cameras,
         axis_scores,
         support,
     }
@@ -175,6 +232,79 @@ impl Inspection {
     /// The robust bounds after [`upright_rotation`] (the box of the eight rotated corners).
     pub fn upright_robust_bounds(&self) -> (Vec3, Vec3) {
         rotated_box(upright_rotation(self.up), self.robust)
+    }
+
+    /// Up is the convention's guess: no evidence decided it.
+    pub fn is_guess(&self) -> bool {
+        self.evidence == UpEvidence::Convention
+    }
+
+    /// What kept the evidence from deciding, in words.
+    fn undecided(&self) -> String {
+        let cameras = match &self.cameras {
+            None => "no cameras".to_string(),
+            Some(c) => format!(
+                "{} cameras whose ups disagree (agreement {:.2} < {CAMERAS_AGREEMENT})",
+                c.count, c.agreement
+            ),
+        };
+        format!("{cameras}, no support plane and no seen top decided")
+    }
+
+    /// One line for a capture (`name`) whose up is a guess, naming the ways to decide it.
+    pub fn guess_warning(&self, name: &str) -> Option<String> {
+        self.is_guess().then(|| {
+            format!(
+                "{name}: up {} is a guess ({}; the camera convention's -y): if it stands on its head, \
+                 say which way is up with `render --ply FILE --up AXIS`, `\"up\": \"+y\"` (or another axis) \
+                 in a scene, or the capture's cameras (`--cameras cameras.json`, or a cameras.json next to the capture)",
+                self.up_name(),
+                self.undecided()
+            )
+        })
+    }
+
+    /// The up found and how: `"-y", from the mean up of 24 cameras, …`.
+    pub fn up_text(&self) -> String {
+        format!("{}, from {}", self.up_name(), self.evidence_text())
+    }
+
+    /// `"+y"` for an axis, else the vector.
+    fn up_name(&self) -> String {
+        axis_name(self.up).map_or_else(
+            || format!("[{:.4}, {:.4}, {:.4}]", self.up.x, self.up.y, self.up.z),
+            |a| format!("\"{a}\""),
+        )
+    }
+
+    /// How up was decided, in words.
+    fn evidence_text(&self) -> String {
+        match &self.evidence {
+            UpEvidence::Cameras { count, spread_deg } => {
+                let off = self
+                    .cameras
+                    .map_or(0.0, |c| c.up.angle_between(self.up).to_degrees());
+                let snapped = if off > 0.05 {
+                    format!(" {off:.1}° off the axis,")
+                } else {
+                    String::new()
+                };
+                format!(
+                    "the mean up of {count} cameras,{snapped} whose ups spread {spread_deg:.1}° (RMS) about it"
+                )
+            }
+            UpEvidence::SupportPlane { share } => format!(
+                "the normal of a support plane holding {:.0}% of the core",
+                100.0 * share
+            ),
+            UpEvidence::SeenTop { score, runner_up } => format!(
+                "a seen top: {:+.3} (next best direction {:+.3})",
+                score, runner_up
+            ),
+            UpEvidence::Convention => {
+                format!("the camera convention's -y, a guess ({})", self.undecided())
+            }
+        }
     }
 }
 
@@ -232,9 +362,22 @@ fn seen_top_score(core: &[Vec3], up: Vec3) -> f32 {
     (top as f32 - bottom as f32) / core.len() as f32
 }
 
-/// Up from a support plane (as [`support_plane`] found it), else from a seen top, else
-/// the convention.
-fn estimate_up(plane: Option<(Vec3, f32, f32)>, scores: &[f32; 6]) -> (Vec3, UpEvidence) {
+/// Up from the cameras when they agree, else from a support plane (as [`support_plane`]
+/// found it), else from a seen top, else the convention.
+fn estimate_up(
+    cameras: Option<CamerasUp>,
+    plane: Option<(Vec3, f32, f32)>,
+    scores: &[f32; 6],
+) -> (Vec3, UpEvidence) {
+    if let Some(c) = cameras.filter(|c| c.agreement >= CAMERAS_AGREEMENT) {
+        return (
+            snap_to_axis(c.up),
+            UpEvidence::Cameras {
+                count: c.count,
+                spread_deg: c.spread_deg,
+            },
+        );
+    }
     if let Some((normal, _, share)) = plane {
         return (snap_to_axis(normal), UpEvidence::SupportPlane { share });
     }
@@ -351,21 +494,18 @@ impl std::fmt::Display for Inspection {
             "scale:         largest axis median {:.3e}, 1st-99th percentile {:.3e} .. {:.3e}",
             self.scale.median, self.scale.p1, self.scale.p99
         )?;
-        let up = axis_name(self.up).map_or_else(|| v(self.up), |a| format!("\"{a}\""));
-        let how = match &self.evidence {
-            UpEvidence::SupportPlane { share } => format!(
-                "the normal of a support plane holding {:.0}% of the core",
-                100.0 * share
-            ),
-            UpEvidence::SeenTop { score, runner_up } => format!(
-                "a seen top: {:+.3} (next best direction {:+.3})",
-                score, runner_up
-            ),
-            UpEvidence::Convention => {
-                "no support plane and no seen top decided; the camera convention's -y".into()
-            }
-        };
-        writeln!(f, "up:            {up}, from {how}")?;
+        let up = self.up_name();
+        writeln!(f, "up:            {}", self.up_text())?;
+        if let Some(c) = self
+            .cameras
+            .filter(|_| !matches!(self.evidence, UpEvidence::Cameras { .. }))
+        {
+            writeln!(
+                f,
+                "               not from the {} cameras: their ups disagree (agreement {:.2} < {CAMERAS_AGREEMENT})",
+                c.count, c.agreement
+            )?;
+        }
         let scores: Vec<String> = AXES
             .iter()
             .zip(self.axis_scores)
@@ -412,5 +552,99 @@ mod tests {
         assert_eq!(axis_vector("w"), None);
         let tilted = Vec3::new(0.3, -0.8, 0.2).normalize();
         assert!((upright_rotation(tilted) * tilted).distance(Vec3::Z) < 1e-5);
+    }
+
+    /// Camera-to-world rotations (OpenCV axes) of `n` cameras on a circle round `up`, each
+    /// pitched `pitch_deg` down at the centre and rolled `roll_deg(i)` about its view axis.
+    fn orbit(up: Vec3, n: usize, pitch_deg: f32, roll_deg: impl Fn(usize) -> f32) -> Vec<Mat3> {
+        let (e1, e2) = up.any_orthonormal_pair();
+        let pitch = pitch_deg.to_radians();
+        (0..n)
+            .map(|i| {
+                let azimuth = std::f32::consts::TAU * i as f32 / n as f32;
+                let radial = azimuth.cos() * e1 + azimuth.sin() * e2;
+                let forward = -pitch.cos() * radial - pitch.sin() * up;
+                let right = forward.cross(up).normalize();
+                let down = forward.cross(right);
+                let roll = Mat3::from_axis_angle(forward, roll_deg(i).to_radians());
+                Mat3::from_cols(roll * right, roll * down, forward)
+            })
+            .collect()
+    }
+
+    /// Cameras round a known up off every axis: their mean up is it, their agreement the
+    /// cosine of their pitch and their spread the pitch.
+    #[test]
+    fn cameras_up_of_an_orbit_is_its_up() {
+        let up = Vec3::new(0.2, -0.9, 0.35).normalize();
+        let found = cameras_up(&orbit(up, 24, 30.0, |_| 0.0)).unwrap();
+        assert!(found.up.angle_between(up) < 1e-3, "{found:?}");
+        assert_eq!(found.count, 24);
+        assert!(
+            (found.agreement - 30f32.to_radians().cos()).abs() < 1e-4,
+            "{found:?}"
+        );
+        assert!((found.spread_deg - 30.0).abs() < 0.05, "{found:?}");
+        // Hand-held roll of a few degrees either way moves the mean by less.
+        let shaky = cameras_up(&orbit(up, 24, 30.0, |i| [4.0, -3.0, 1.0][i % 3])).unwrap();
+        assert!(shaky.up.angle_between(up).to_degrees() < 1.0, "{shaky:?}");
+        assert!(cameras_up(&[]).is_none());
+    }
+
+    /// Cameras decide ahead of the geometry, snapped to an axis within 10°; cameras whose ups
+    /// cancel (held every way round) do not, and the result is the convention's guess.
+    #[test]
+    fn cameras_decide_unless_they_disagree() {
+        let scores = [0.0; 6];
+        let tilted = Mat3::from_rotation_z(5f32.to_radians()) * Vec3::Y;
+        let agreeing = cameras_up(&orbit(tilted, 12, 20.0, |_| 0.0));
+        let (up, evidence) = estimate_up(agreeing, None, &scores);
+        assert_eq!(up, Vec3::Y);
+        assert!(
+            matches!(evidence, UpEvidence::Cameras { count: 12, .. }),
+            "{evidence:?}"
+        );
+        // Ahead of a support plane and a seen top that say otherwise.
+        let mut seen_top = [0.0; 6];
+        seen_top[4] = 0.5;
+        let plane = Some((Vec3::Z, 0.0, 0.5));
+        assert_eq!(estimate_up(agreeing, plane, &seen_top).0, Vec3::Y);
+        assert_eq!(estimate_up(None, plane, &seen_top).0, Vec3::Z);
+        let every_way = cameras_up(&orbit(Vec3::Y, 12, 20.0, |i| 90.0 * i as f32));
+        assert!(
+            every_way.is_none_or(|c| c.agreement < CAMERAS_AGREEMENT),
+            "{every_way:?}"
+        );
+        let (up, evidence) = estimate_up(every_way, None, &scores);
+        assert_eq!((up, evidence), (-Vec3::Y, UpEvidence::Convention));
+    }
+
+    /// Cameras that disagree are reported as not used, and the guess's warning says why.
+    #[test]
+    fn disagreeing_cameras_are_reported() {
+        let mut cloud = GaussianCloud::default();
+        let mut rng = SplitMix64::new(3);
+        for _ in 0..500 {
+            let p = Vec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            );
+            cloud.positions.push(p);
+            cloud.scales.push(Vec3::splat(0.01));
+            cloud.rotations.push(glam::Quat::IDENTITY);
+            cloud.opacities.push(0.9);
+            cloud.sh.extend([0.0; 3]);
+        }
+        let every_way = cameras_up(&orbit(Vec3::Y, 12, 20.0, |i| 90.0 * i as f32));
+        let found = inspect_with_cameras(&cloud, every_way);
+        assert!(found.is_guess(), "{:?}", found.evidence);
+        let report = found.to_string();
+        assert!(report.contains("not from the 12 cameras"), "{report}");
+        let warning = found.guess_warning("cube").unwrap();
+        assert!(
+            warning.contains("12 cameras whose ups disagree"),
+            "{warning}"
+        );
     }
 }
