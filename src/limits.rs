@@ -89,36 +89,58 @@ pub fn render_needs(gaussians: usize, width: u32, height: u32) -> Vec<Need> {
 }
 
 /// The simulation's largest buffers for `particles` particles on a grid of `cells` cells
-/// per axis ([`Grid::cells`](crate::sim::Grid)).
-pub fn sim_needs(particles: usize, cells: UVec3) -> Vec<Need> {
+/// per axis ([`Grid::cells`](crate::sim::Grid)), on the gather P2G path when `gather`. The
+/// grid's nodes live in a pool of the blocks the particles reach (`GpuSim`), grown as they
+/// move and capped where it stops fitting (`GpuSim::max_pool_blocks`), so the whole grid
+/// needs only its block tables, 4 bytes a block of 4³ nodes; the gather path also indexes
+/// every cell (its runs of sorted particles) and binds the particle arrays whole; a
+/// captured surface collider (`surface`) samples its distance at every node.
+pub fn sim_needs(particles: usize, cells: UVec3, gather: bool, surface: bool) -> Vec<Need> {
     let n = particles as u64;
-    let nodes: u64 = cells.to_array().iter().map(|c| u64::from(*c) + 1).product();
+    let nodes = cells.to_array().map(|c| u64::from(c) + 1);
+    let blocks: u64 = nodes.iter().map(|n| n.div_ceil(4)).product();
+    let node_count: u64 = nodes.iter().product();
     let cell_count: u64 = cells.to_array().iter().map(|c| u64::from(*c)).product();
-    vec![
+    let mut needs = vec![
         Need {
-            what: format!("the deformation gradients of {n} particles"),
+            what: if gather {
+                format!("the deformation gradients of {n} particles, which the gather P2G path (two-field separation) binds whole")
+            } else {
+                format!("the deformation gradients of {n} particles")
+            },
             bytes: n * 48,
             advice: FEWER_PARTICLES,
-            fit: Fit::Buffer,
+            fit: if gather { Fit::Binding } else { Fit::Buffer },
         },
         Need {
             what: format!(
-                "the grid of {}×{}×{} nodes",
+                "the block table of a grid of {}×{}×{} nodes",
                 cells.x + 1,
                 cells.y + 1,
                 cells.z + 1
             ),
-            bytes: nodes * 16,
+            bytes: blocks * 4,
             advice: SMALLER_GRID,
             fit: Fit::Binding,
         },
-        Need {
-            what: format!("the cell ranges of {cell_count} grid cells"),
+    ];
+    if surface {
+        needs.push(Need {
+            what: format!("the captured surface's distance at {node_count} grid nodes"),
+            bytes: node_count * 4,
+            advice: SMALLER_GRID,
+            fit: Fit::Binding,
+        });
+    }
+    if gather {
+        needs.push(Need {
+            what: format!("the cell ranges of {cell_count} grid cells (gather P2G path)"),
             bytes: (cell_count + 1) * 8,
             advice: SMALLER_GRID,
             fit: Fit::Binding,
-        },
-    ]
+        });
+    }
+    needs
 }
 
 /// The derive pass's buffers, which it binds whole: the rest records
@@ -206,7 +228,13 @@ mod tests {
             "test",
         )
         .unwrap();
-        check(&sim_needs(1_000_000, grid(128)), binding, buffer, "test").unwrap();
+        check(
+            &sim_needs(1_000_000, grid(128), true, true),
+            binding,
+            buffer,
+            "test",
+        )
+        .unwrap();
         // Paged arrays: past one binding, within one buffer.
         check(
             &render_needs(6_000_000, 1920, 1080),
@@ -215,7 +243,13 @@ mod tests {
             "test",
         )
         .unwrap();
-        check(&sim_needs(27_000_000, grid(192)), binding, buffer, "test").unwrap();
+        check(
+            &sim_needs(27_000_000, grid(192), false, false),
+            binding,
+            buffer,
+            "test",
+        )
+        .unwrap();
 
         let e = check(
             &render_needs(30_000_000, 64, 64),
@@ -239,12 +273,46 @@ mod tests {
         assert!(e.to_string().contains("--width"), "{e}");
         assert!(e.to_string().contains("storage binding"), "{e}");
 
-        let e = check(&sim_needs(10, grid(400)), binding, buffer, "x").unwrap_err();
-        assert!(e.to_string().contains("401×401×401 nodes"), "{e}");
+        // A grid of 401³ nodes: the scatter paths hold only its 1M-entry block table; the
+        // gather path indexes its 64M cells.
+        check(
+            &sim_needs(10, grid(400), false, false),
+            binding,
+            buffer,
+            "x",
+        )
+        .unwrap();
+        let e = check(&sim_needs(10, grid(400), true, false), binding, buffer, "x").unwrap_err();
+        assert!(e.to_string().contains("64000000 grid cells"), "{e}");
         assert!(e.to_string().contains("simulation.dx"), "{e}");
+        let e = check(
+            &sim_needs(10, grid(5000), false, false),
+            binding,
+            buffer,
+            "x",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("block table"), "{e}");
+        let e = check(&sim_needs(10, grid(400), false, true), binding, buffer, "x").unwrap_err();
+        assert!(e.to_string().contains("surface's distance"), "{e}");
 
-        let e = check(&sim_needs(50_000_000, grid(16)), binding, buffer, "x").unwrap_err();
+        let e = check(
+            &sim_needs(50_000_000, grid(16), false, false),
+            binding,
+            buffer,
+            "x",
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("50000000 particles"), "{e}");
+        // The gather path binds them whole: 3M particles' F is past one binding.
+        let e = check(
+            &sim_needs(3_000_000, grid(16), true, false),
+            binding,
+            buffer,
+            "x",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("binds whole"), "{e}");
 
         // The derive pass binds its arrays whole.
         let e = check(&derive_needs(1000, 4_000_000, 1000), binding, buffer, "x").unwrap_err();

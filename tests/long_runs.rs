@@ -405,14 +405,28 @@ fn sizes_past_the_buffer_limits_are_refused_up_front() {
     );
     assert!(frames_in(&d.join("o")).is_empty());
 
+    // A grid of 376³ nodes: the scatter paths hold its nodes in a pool of the blocks the
+    // particles reach, so it runs; the gather path (two-field separation) indexes every
+    // one of its 53M cells, past lavapipe's 128 MiB binding.
+    let fine = sim_scene_with(2, 200.0, r#"{ "spacing": 0.0016 }"#)
+        .replace("\"dx\": 0.05", "\"dx\": 0.0016")
+        .replace("[0.15, 0.15, 0.15]", "[0.03, 0.03, 0.03]");
+    write(d, "fine.json", &fine);
+    expect_success(&splatter(
+        d,
+        &["render", "fine.json", "--out", "fine", "--frames", "0"],
+    ));
     write(
         d,
-        "fine.json",
-        &sim_scene(2, 200.0).replace("\"dx\": 0.05", "\"dx\": 0.0016"),
+        "fine_gather.json",
+        &fine.replace(
+            "\"ground\"",
+            "\"separation\": \"damage_gradient\", \"ground\"",
+        ),
     );
-    let line = expect_error(&splatter(d, &["render", "fine.json", "--out", "o"]));
+    let line = expect_error(&splatter(d, &["render", "fine_gather.json", "--out", "o"]));
     assert!(
-        line.contains("376×376×376 nodes") && line.contains("simulation.dx"),
+        line.contains("cell ranges of 52734375 grid cells") && line.contains("simulation.dx"),
         "{line}"
     );
 }

@@ -166,3 +166,38 @@ fn an_overflow_past_the_adapters_pool_limit_is_an_error() {
         other => panic!("expected PoolAtLimit, got {other:?}"),
     }
 }
+
+/// The pool's cap is checked when the simulation is set up: particles that already reach
+/// more blocks than the adapter's pool can hold are refused, naming the blocks needed and
+/// the limit, before anything is allocated (here the cap comes from a storage binding of
+/// 1 MiB, which holds the sums of 512 blocks in fixed point, 1 024 in floats).
+#[test]
+fn particles_past_the_pool_cap_are_refused_up_front() {
+    let mut gpu = GpuContext::new(None).unwrap();
+    gpu.limits.max_storage_buffer_binding_size = 1 << 20;
+    let dx = 1.0 / 64.0;
+    let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
+    // One particle in each block of 4³ nodes (their centres, 4 Δx apart): 15³ blocks.
+    let p = Particles::sample_box(DVec3::splat(0.06), DVec3::splat(0.99), 4.0 * dx, 1000.0);
+    let params = StepParams {
+        dt: 1e-4,
+        gravity: DVec3::ZERO,
+        boundaries: Default::default(),
+        transfer: Default::default(),
+        separation: Default::default(),
+    };
+    let materials = [Material::fixed_corotated(1e4, 0.3)];
+    let mut paths = vec![P2gPath::Fixed];
+    if gpu.features.float32_atomics {
+        paths.push(P2gPath::Atomic);
+    }
+    for path in paths {
+        let e = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, path)
+            .err()
+            .unwrap_or_else(|| panic!("{path:?}: {} particles accepted", p.len()))
+            .to_string();
+        eprintln!("{path:?}: {e}");
+        assert!(e.contains("blocks of 4³ grid nodes"), "{e}");
+        assert!(e.contains("coarser grid"), "{e}");
+    }
+}

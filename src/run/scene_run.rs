@@ -63,9 +63,21 @@ pub(super) fn execute(
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
+    let p2g = match &setup {
+        Some(s) if opts.deterministic => P2gPath::deterministic_for(&s.params),
+        Some(s) => P2gPath::for_params(gpu, &s.params),
+        None => P2gPath::best(gpu),
+    };
     let mut needs = limits::render_needs(splats.len(), width, height);
     if let Some(s) = &setup {
-        needs.extend(limits::sim_needs(s.particles.len(), s.grid.cells));
+        let gather = p2g == P2gPath::Gather;
+        let surface = s.params.boundaries.surface.is_some();
+        needs.extend(limits::sim_needs(
+            s.particles.len(),
+            s.grid.cells,
+            gather,
+            surface,
+        ));
         needs.extend(limits::derive_needs(
             s.binding.len(),
             s.particles.len(),
@@ -80,11 +92,6 @@ pub(super) fn execute(
         job.frames.clone().find(|f| !job.frame_done(&dir, *f))
     } else {
         Some(job.frames.start)
-    };
-    let p2g = match &setup {
-        Some(s) if opts.deterministic => P2gPath::deterministic_for(&s.params),
-        Some(s) => P2gPath::for_params(gpu, &s.params),
-        None => P2gPath::best(gpu),
     };
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
     for note in &scene.up_notes {
@@ -200,14 +207,29 @@ pub(super) fn execute(
     job.finish(result, sink, fragments, on_event)
 }
 
-/// The grid's GPU size, checked before the simulation setup allocates it on the CPU.
+/// The grid's size, checked before the simulation setup builds it: its nodes are indexed
+/// with 32 bits, and what the GPU step holds per block, per cell (the gather path, which
+/// two-field separation runs on) and per node (a captured surface's distance) must fit the
+/// adapter.
 fn check_grid_fits(gpu: &GpuContext, scene: &scene::Scene) -> Result<()> {
     if let Some(spec) = &scene.simulation {
         let (lo, hi) = (DVec3::from(spec.domain.lo), DVec3::from(spec.domain.hi));
         let cells = ((hi - lo) / spec.dx - 1e-9).ceil().max(DVec3::ONE);
-        if cells.is_finite() && cells.max_element() < f64::from(u32::MAX) {
-            limits::check_gpu(gpu, &limits::sim_needs(0, cells.as_uvec3()))?;
+        let nodes = cells + 1.0;
+        if !nodes.is_finite() || nodes.element_product() >= f64::from(u32::MAX) {
+            bail!(
+                "simulation: a grid of {:.0}×{:.0}×{:.0} nodes (domain / dx) has more nodes than the 2^32 the simulation indexes; use a coarser or smaller grid (a larger simulation.dx, or a smaller simulation.domain)",
+                nodes.x,
+                nodes.y,
+                nodes.z
+            );
         }
+        let gather = spec.separation != scene::physics::SeparationSpec::None;
+        let surface = scene.objects.iter().any(|o| o.collider.is_some());
+        limits::check_gpu(
+            gpu,
+            &limits::sim_needs(0, cells.as_uvec3(), gather, surface),
+        )?;
     }
     Ok(())
 }

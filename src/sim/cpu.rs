@@ -63,6 +63,7 @@ pub fn p2g(
     transfer: Transfer,
     separation: Separation,
 ) -> usize {
+    grid.size_fields();
     let n = particles.len();
     let dx = grid.dx;
     let inv_d = 4.0 / (dx * dx);

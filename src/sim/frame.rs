@@ -10,7 +10,7 @@ pub enum FrameError {
     Gpu(#[from] GpuError),
     #[error("{overflow} block(s) overflowed a sparse-grid pool that holds every block of the domain (an internal error; please report it)")]
     PoolHoldsDomain { overflow: u32 },
-    #[error("the simulation's moving region reached {needed} blocks of 4³ grid nodes, more than the {limit} this adapter's grid texture holds (64 blocks per row of its largest 2D texture): use a coarser grid (a larger simulation.dx)")]
+    #[error("the simulation's moving region reached {needed} blocks of 4³ grid nodes, more than the {limit} this adapter's grid pool holds (its grid texture, 64 blocks per row of the largest 2D texture, and its sums, one storage binding): use a coarser grid (a larger simulation.dx)")]
     PoolAtLimit { needed: u32, limit: u32 },
 }
 

@@ -150,10 +150,25 @@ fn blocks_reached(particles: &Particles, grid: &Grid) -> u32 {
     seen.len() as u32
 }
 
-/// First pool size: twice the blocks the particles reach at the start (at least 64), at
-/// most every block. [`GpuSim::fit_pool`] grows it between frames.
-fn initial_pool(particles: &Particles, grid: &Grid, blocks: u32) -> u32 {
-    (2 * blocks_reached(particles, grid)).max(64).min(blocks)
+/// First pool size: twice the blocks `reached` at the start (at least 64), at most
+/// `max_blocks`. [`GpuSim::fit_pool`] grows it between frames.
+fn initial_pool(reached: u32, max_blocks: u32) -> u32 {
+    (2 * reached).max(64).min(max_blocks)
+}
+
+/// The largest pool: every block of the domain, at most what the grid texture holds and
+/// what keeps the pool's per-node arrays (the scatter's sums, separation's far field)
+/// within one storage binding each (they are bound whole).
+fn max_pool_blocks(
+    limits: &wgpu::Limits,
+    (path, step, separation): (P2gPath, &GpuStep, bool),
+    blocks: u32,
+) -> u32 {
+    let per_block = sums_bytes(path, step, 1).max(separation_bytes(separation, 1, 32));
+    let binding = limits.max_storage_buffer_binding_size;
+    let by_binding = u32::try_from(binding / per_block.max(1)).unwrap_or(u32::MAX);
+    let texture = GridTexture::max_blocks(limits.max_texture_dimension_2d);
+    blocks.min(texture).min(by_binding)
 }
 
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
@@ -338,8 +353,15 @@ impl GpuSim {
         let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
         let base_cells = (grid.cells - 1).element_product();
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
-        let max_pool_blocks = blocks.min(GridTexture::max_blocks(texture_limit));
-        let pool = initial_pool(particles, grid, max_pool_blocks);
+        let max_pool_blocks = max_pool_blocks(&gpu.limits, (path, &step, separation), blocks);
+        let reached = blocks_reached(particles, grid);
+        if reached > max_pool_blocks {
+            return Err(SimSetupError::PoolAtLimit {
+                needed: reached,
+                limit: max_pool_blocks,
+            });
+        }
+        let pool = initial_pool(reached, max_pool_blocks);
         step.pool_blocks = pool;
         let nn = u64::from(n);
         let buffers = StepBuffers {
@@ -360,7 +382,15 @@ impl GpuSim {
             values_alt: zeroed(gpu, "sim cell values alt", nn * 4),
             key_count: init(gpu, "sim key count", &[n], false),
             affine: zeroed(gpu, "sim affine", nn * 48),
-            ranges: zeroed(gpu, "sim cell ranges", (u64::from(base_cells) + 1) * 8),
+            // Each cell's run of sorted particles: the gather path's alone.
+            ranges: zeroed(
+                gpu,
+                "sim cell ranges",
+                match path {
+                    P2gPath::Gather => (u64::from(base_cells) + 1) * 8,
+                    _ => 16,
+                },
+            ),
             grid: zeroed(gpu, "sim grid pool", sums_bytes(path, &step, pool)),
             grid_velocity: GridTexture::new(device, "sim grid velocity", pool),
             grid_velocity_change: velocity_change_texture(device, &step, pool),
@@ -575,7 +605,7 @@ impl GpuSim {
     }
 
     /// Resize the grid pool to `blocks` blocks (at most every block of the domain, and at
-    /// most what the grid texture holds: [`Self::pool_at_limit`]). Results
+    /// most what the grid texture and one binding hold: [`Self::pool_at_limit`]). Results
     /// do not depend on the size as long as no step overflows it.
     pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
         let blocks = blocks.clamp(1, self.max_pool_blocks);
@@ -605,7 +635,8 @@ impl GpuSim {
     }
 
     /// Whether the pool is as large as it can be on this adapter (every block of the
-    /// domain, or what the grid texture holds): an overflow then cannot be grown out of.
+    /// domain, or what the grid texture and one binding hold): an overflow then cannot be
+    /// grown out of.
     pub fn pool_at_limit(&self) -> bool {
         self.consts.pool_blocks >= self.max_pool_blocks
     }

@@ -12,7 +12,9 @@ use glam::{DVec3, IVec3, UVec3};
 use super::bspline::Stencil;
 
 /// A dense MPM grid (module docs). `mass` and `momentum` hold the last P2G's sums,
-/// `velocity` the last grid update's result.
+/// `velocity` the last grid update's result; the CPU step's first P2G sizes them
+/// ([`Grid::size_fields`]), so a grid that only describes the GPU step's domain (box,
+/// spacing, cells) holds no per-node memory.
 #[derive(Clone, Debug)]
 pub struct Grid {
     /// Position of node 0.
@@ -89,13 +91,22 @@ impl Grid {
             lo,
             dx,
             cells,
-            mass: vec![0.0; count],
-            momentum: vec![DVec3::ZERO; count],
-            carried: vec![DVec3::ZERO; count],
-            velocity: vec![DVec3::ZERO; count],
+            mass: Vec::new(),
+            momentum: Vec::new(),
+            carried: Vec::new(),
+            velocity: Vec::new(),
             far: FarField::default(),
             cell_start: Vec::new(),
             order: Vec::new(),
+        }
+    }
+
+    /// One entry per node in each of the near field's arrays (kept when already sized).
+    pub(crate) fn size_fields(&mut self) {
+        let n = self.node_count();
+        self.mass.resize(n, 0.0);
+        for v in [&mut self.momentum, &mut self.carried, &mut self.velocity] {
+            v.resize(n, DVec3::ZERO);
         }
     }
 
@@ -106,7 +117,8 @@ impl Grid {
 
     /// Number of nodes.
     pub fn node_count(&self) -> usize {
-        self.mass.len()
+        let n = self.nodes();
+        (n.x as usize) * (n.y as usize) * (n.z as usize)
     }
 
     /// The far corner lo + cells·Δx.

@@ -198,6 +198,8 @@ pub enum SimSetupError {
     TooManyColliders(usize),
     #[error("{0} moving colliders given; the GPU step supports at most {MAX_KINEMATIC}")]
     TooManyKinematic(usize),
+    #[error("the simulation's particles reach {needed} blocks of 4³ grid nodes at the start, more than the {limit} this adapter's grid pool holds (its grid texture, 64 blocks per row of the largest 2D texture, and its sums, one storage binding): use a coarser grid (a larger simulation.dx)")]
+    PoolAtLimit { needed: u32, limit: u32 },
     #[error(transparent)]
     Gpu(#[from] GpuError),
 }
