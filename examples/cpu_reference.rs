@@ -2,7 +2,7 @@
 //! each simulated object's fragments: a way to try what the GPU step does not have yet
 //! (two-field separation) on a real scene.
 //!
-//! `cargo run --release --example cpu_drop -- SCENE.json FRAMES [one|two] [PARTICLES_DIR]`
+//! `cargo run --release --example cpu_reference -- SCENE.json FRAMES [scene|one|two]`
 //!
 //! Prints per frame and object: pieces (≥ 1% of the particles), the largest one's share,
 //! the damaged share (α ≥ 0), the fastest particle and the wall time so far.
