@@ -27,16 +27,10 @@ const NACC_SIGMA_MIN: f32 = 1e-4;
 // Floor of the radicand of J_E(p) = sqrt(1 − 2p/κ): SIGMA_MIN⁶ (`nacc::j_from_pressure`).
 const NACC_JE_RADICAND_MIN: f32 = 1e-24;
 
-// Case-3 variants (`NaccMaterial.variant`, `nacc::Case3Variant`).
-const NACC_VARIANT_CENTER: u32 = 0u;
-const NACC_VARIANT_CONTINUOUS: u32 = 1u;
-const NACC_VARIANT_CLOSEST_POINT: u32 = 2u;
-
-// Rows of the return-mapping table (`nacc::ReturnCase`, same order).
-const NACC_ELASTIC: u32 = 0u;
-const NACC_UPPER_TIP: u32 = 1u;
-const NACC_LOWER_TIP: u32 = 2u;
-const NACC_INTERIOR: u32 = 3u;
+// The case-3 variants NACC_VARIANT_{CENTER,CONTINUOUS,CLOSEST_POINT} (`NaccMaterial.variant`,
+// `nacc::Case3Variant`) and the rows of the return-mapping table NACC_{ELASTIC,UPPER_TIP,
+// LOWER_TIP,INTERIOR} (`nacc::ReturnCase`) are generated from the Rust types
+// (src/sim/codes.rs) and precede this file.
 
 // Most bisection steps of the closest-point projection. It stops once the bracket is
 // below 2⁻²³ (t + min e²) (x is then exact to f32), which takes log2(width/(ε min e²))

@@ -33,8 +33,7 @@ pub use super::step::layout::{
 };
 /// Bytes of the largest per-particle record (F, C: `mat3x3<f32>`), which sizes the pages.
 const MAT3_BYTES: u64 = 48;
-/// Nodes per axis of an active block (`BLOCK` in `shaders/sim/step/common.wgsl`).
-const BLOCK: u32 = 4;
+use super::codes::BLOCK;
 
 /// What the watchdog counted (particle-steps, summed over the steps since the last read).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -26,6 +26,7 @@
 
 pub mod boundary;
 pub mod bspline;
+pub mod codes;
 pub mod cpu;
 pub mod elasticity;
 pub mod frame;

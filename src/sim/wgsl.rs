@@ -29,15 +29,12 @@ pub const ELASTICITY: &str = include_str!("../../shaders/sim/elasticity.wgsl");
 /// NACC return mapping (docs/method.md §4). Needs [`MATH`], [`SVD`].
 pub const NACC: &str = include_str!("../../shaders/sim/nacc.wgsl");
 
-/// All simulation modules in dependency order, ready to prepend to a kernel.
+/// All simulation modules in dependency order, ready to prepend to a kernel, after the
+/// codes they read (`NACC_VARIANT_*`, `NACC_*` cases: [`super::codes`]).
 pub fn library() -> String {
-    [MATH, BSPLINE, SVD, ELASTICITY, NACC].join("\n")
+    let codes = super::codes::material_wgsl();
+    [codes.as_str(), MATH, BSPLINE, SVD, ELASTICITY, NACC].join("\n")
 }
-
-/// `NACC_VARIANT_*` codes of `NaccMaterial.variant`.
-pub const VARIANT_CENTER: u32 = 0;
-pub const VARIANT_CONTINUOUS: u32 = 1;
-pub const VARIANT_CLOSEST_POINT: u32 = 2;
 
 /// The WGSL `NaccMaterial` (32 bytes): κ and μ computed here in f64, then rounded.
 #[repr(C)]
@@ -50,7 +47,7 @@ pub struct NaccMaterialGpu {
     pub m_slope: f32,
     /// Exponent of the `continuous` variant (0 for the others).
     pub k: f32,
-    /// `VARIANT_*`.
+    /// `NACC_VARIANT_*` ([`Case3Variant::gpu_code`]).
     pub variant: u32,
     /// Initial hardening state α₀ (a particle's damage, `Material::damage`).
     pub alpha0: f32,
@@ -58,10 +55,9 @@ pub struct NaccMaterialGpu {
 
 impl NaccMaterialGpu {
     pub fn new(params: &NaccParams, variant: Case3Variant) -> Self {
-        let (code, k) = match variant {
-            Case3Variant::Center => (VARIANT_CENTER, 0.0),
-            Case3Variant::Continuous { k } => (VARIANT_CONTINUOUS, k),
-            Case3Variant::ClosestPoint => (VARIANT_CLOSEST_POINT, 0.0),
+        let k = match variant {
+            Case3Variant::Continuous { k } => k,
+            Case3Variant::Center | Case3Variant::ClosestPoint => 0.0,
         };
         NaccMaterialGpu {
             kappa: params.kappa() as f32,
@@ -70,21 +66,15 @@ impl NaccMaterialGpu {
             xi: params.xi as f32,
             m_slope: params.m_slope as f32,
             k: k as f32,
-            variant: code,
+            variant: variant.gpu_code(),
             alpha0: params.alpha0 as f32,
         }
     }
 }
 
-/// The [`ReturnCase`] of a WGSL `NACC_*` case code (same order as the enum).
+/// The [`ReturnCase`] of a WGSL `NACC_*` case code.
 pub fn return_case(code: u32) -> Option<ReturnCase> {
-    match code {
-        0 => Some(ReturnCase::Elastic),
-        1 => Some(ReturnCase::UpperTip),
-        2 => Some(ReturnCase::LowerTip),
-        3 => Some(ReturnCase::Interior),
-        _ => None,
-    }
+    ReturnCase::from_gpu_code(code)
 }
 
 #[cfg(test)]
@@ -103,7 +93,8 @@ mod tests {
             vec![MATH, SVD, ELASTICITY],
             vec![MATH, SVD, NACC],
         ] {
-            crate::gpu::layout_check::validated_module(&parts.join("\n"));
+            let codes = crate::sim::codes::material_wgsl();
+            crate::gpu::layout_check::validated_module(&format!("{codes}\n{}", parts.join("\n")));
         }
         let src = library();
         let module = naga::front::wgsl::parse_str(&src).expect("WGSL parses");

@@ -2,13 +2,10 @@
 // src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). Concatenated after
 // shaders/sim/{math,bspline,svd,elasticity,nacc}.wgsl.
 
-const MAX_MATERIALS: u32 = 16u;
-const MAX_COLLIDERS: u32 = 8u;
-const MAX_KINEMATIC: u32 = 4u;
-
-const BOUNDARY_STICKY: u32 = 0u;
-const BOUNDARY_SLIP: u32 = 1u;
-const BOUNDARY_SEPARATE: u32 = 2u;
+// The limits MAX_{MATERIALS,COLLIDERS,KINEMATIC}, the boundary kinds BOUNDARY_{STICKY,SLIP,
+// SEPARATE}, the collider shapes SHAPE_{SPHERE,BOX,CYLINDER}, the block size BLOCK and
+// BLOCK_NODES and GRID_TEXELS_PER_ROW are generated from the Rust side (src/sim/codes.rs)
+// and precede this file.
 
 // A boundary condition on a domain face or a collider.
 struct Condition {
@@ -26,10 +23,6 @@ struct Collider {
     normal: vec4<f32>,
     condition: Condition,
 }
-
-const SHAPE_SPHERE: u32 = 0u;
-const SHAPE_BOX: u32 = 1u;
-const SHAPE_CYLINDER: u32 = 2u;
 
 // A moving rigid collider (src/sim/kinematic.rs): a shape about `centre` in its own frame,
 // covering the nodes within `margin` of it.
@@ -226,7 +219,6 @@ fn flat_id(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> u32 {
 // even skipping an empty node costs a load. Particle
 // passes flag the blocks (mark_blocks.wgsl, p2g_scatter.wgsl), compact_blocks.wgsl lists
 // them, and the node passes are dispatched indirectly over the list.
-const BLOCK: u32 = 4u;
 
 fn blocks_per_axis() -> vec3<u32> {
     return (consts.nodes + BLOCK - 1u) / BLOCK;
@@ -272,7 +264,6 @@ fn block_node(block: u32, lid: u32) -> BlockNode {
 // through node_index. Declared here at a binding number no pass uses for anything else;
 // passes that address nodes bind it (GpuSim).
 const NO_SLOT: u32 = 0xffffffffu;
-const BLOCK_NODES: u32 = 64u;
 
 @group(0) @binding(15) var<storage, read_write> block_slot: array<u32>;
 
@@ -293,7 +284,6 @@ fn node_index(i: vec3<u32>) -> u32 {
 // in one unrolled gather, but loads a storage-buffer element at a per-invocation index one
 // lane at a time, in a loop through memory; on a GPU a texel fetch costs no more than a
 // buffer load. A row holds a power of two of nodes, 64 whole blocks.
-const GRID_TEXELS_PER_ROW: u32 = 4096u;
 
 fn grid_texel(n: u32) -> vec2<u32> {
     return vec2<u32>(n % GRID_TEXELS_PER_ROW, n / GRID_TEXELS_PER_ROW);

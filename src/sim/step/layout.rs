@@ -8,12 +8,9 @@ use glam::{DMat3, DVec3};
 use crate::gpu::GpuError;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use crate::sim::wgsl::NaccMaterialGpu;
-use crate::sim::{BoundaryKind, Condition, Grid, Material, StepParams};
+use crate::sim::{Condition, Grid, Material, StepParams};
 
-pub const MAX_MATERIALS: usize = 16;
-pub const MAX_COLLIDERS: usize = 8;
-/// Moving colliders (`MAX_KINEMATIC` in `shaders/sim/step/common.wgsl`).
-pub const MAX_KINEMATIC: usize = 4;
+pub use crate::sim::codes::{MAX_COLLIDERS, MAX_KINEMATIC, MAX_MATERIALS};
 
 /// A 3×3 matrix as WGSL's `mat3x3<f32>` stores it: three columns padded to vec4.
 pub(crate) fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
@@ -81,16 +78,16 @@ pub struct GpuPose {
 
 impl GpuKinematic {
     pub(crate) fn from_cpu(k: &KinematicCollider) -> Self {
-        let (shape, size) = match k.shape {
-            ColliderShape::Sphere { radius } => (0, [radius, 0.0, 0.0]),
-            ColliderShape::Box { half } => (1, half.to_array()),
+        let size = match k.shape {
+            ColliderShape::Sphere { radius } => [radius, 0.0, 0.0],
+            ColliderShape::Box { half } => half.to_array(),
             ColliderShape::Cylinder {
                 radius,
                 half_height,
-            } => (2, [radius, half_height, 0.0]),
+            } => [radius, half_height, 0.0],
         };
         GpuKinematic {
-            shape,
+            shape: k.shape.gpu_code(),
             margin: k.margin as f32,
             _pad: [0; 2],
             size: [size[0] as f32, size[1] as f32, size[2] as f32, 0.0],
@@ -156,14 +153,9 @@ pub struct GpuStep {
 }
 
 impl GpuCondition {
-    fn from_cpu(c: &Condition) -> Self {
-        let kind = match c.kind {
-            BoundaryKind::Sticky => 0,
-            BoundaryKind::Slip => 1,
-            BoundaryKind::Separate => 2,
-        };
+    pub(crate) fn from_cpu(c: &Condition) -> Self {
         GpuCondition {
-            kind,
+            kind: c.kind.gpu_code(),
             friction: c.friction as f32,
             _pad: [0; 2],
         }

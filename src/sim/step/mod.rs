@@ -68,6 +68,7 @@ use crate::gpu::{Executor, Kernel};
 pub(crate) fn source(pass: &str) -> String {
     [
         crate::sim::wgsl::library().as_str(),
+        crate::sim::codes::step_wgsl().as_str(),
         include_str!("../../../shaders/sim/step/common.wgsl"),
         crate::sim::models::wgsl().as_str(),
         include_str!("../../../shaders/sim/step/grid_update.wgsl"),
@@ -153,8 +154,7 @@ pub(crate) struct StepBuffers {
     pub pages: PageRanges,
 }
 
-/// Nodes per row of the grid texture (`GRID_TEXELS_PER_ROW` in common.wgsl): 64 blocks.
-pub(crate) const GRID_TEXELS_PER_ROW: u32 = 4096;
+pub(crate) use crate::sim::codes::GRID_TEXELS_PER_ROW;
 
 /// A vec4 per node of the grid pool as an rgba32float texture, node `n` at texel
 /// (n mod [`GRID_TEXELS_PER_ROW`], n / [`GRID_TEXELS_PER_ROW`]); written by the grid
