@@ -12,6 +12,7 @@ mod build;
 pub mod fill;
 pub mod kinematic;
 pub mod lighting;
+pub mod material;
 pub(crate) mod path;
 pub mod physics;
 pub mod quality;

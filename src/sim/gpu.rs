@@ -35,85 +35,11 @@ pub use super::step::layout::{
 const MAT3_BYTES: u64 = 48;
 use super::codes::BLOCK;
 
-/// What the watchdog counted (particle-steps, summed over the steps since the last read).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Watchdog {
-    pub nonfinite: u32,
-    pub escaped: u32,
-    /// The first of those steps in which a particle was counted, 0-based from the last read.
-    pub first_step: Option<u32>,
-    /// The most blocks of 4³ nodes active in one of those steps (the sparse grid's need).
-    pub active_blocks_max: u32,
-    /// Active blocks that found the grid pool full (their nodes were skipped: the steps are
-    /// wrong; grow the pool, [`GpuSim::fit_pool`]).
-    pub pool_overflow: u32,
-    /// Particles past the fixed-point P2G's speed bound (`GpuStep::speed_bound`; they added
-    /// nothing to the grid: the steps are wrong).
-    pub fixed_point_range: u32,
-}
+mod p2g_path;
+mod watchdog;
 
-impl Watchdog {
-    /// Whether a step counted a particle that makes the run wrong (the pool's overflow,
-    /// which a re-run with a larger pool repairs, aside).
-    pub fn failed(&self) -> bool {
-        self.nonfinite > 0 || self.escaped > 0 || self.fixed_point_range > 0
-    }
-}
-
-/// How P2G sums particle contributions on the grid.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum P2gPath {
-    /// Sort by cell, then each node gathers in a fixed order: deterministic, needs no
-    /// atomics (runs on every backend).
-    Gather,
-    /// Each particle adds to its 27 nodes with float atomics (SHADER_FLOAT32_ATOMIC): no
-    /// sort; the summation order, and so the last bits, vary between runs.
-    Atomic,
-    /// Each particle adds to its 27 nodes with integer atomics on 64-bit fixed-point sums
-    /// (docs/method.md §2.4): no sort, and the sums are the same in any order, so
-    /// deterministic; runs on every backend.
-    Fixed,
-}
-
-impl P2gPath {
-    /// As the manifest and the command line name it.
-    pub fn name(self) -> &'static str {
-        match self {
-            P2gPath::Gather => "gather",
-            P2gPath::Atomic => "atomic",
-            P2gPath::Fixed => "fixed",
-        }
-    }
-
-    /// Atomics where the adapter has them, else the gather.
-    pub fn best(gpu: &GpuContext) -> P2gPath {
-        if gpu.features.float32_atomics {
-            P2gPath::Atomic
-        } else {
-            P2gPath::Gather
-        }
-    }
-
-    /// The fastest deterministic path that runs `params`: the gather for two-field
-    /// separation (the scatter paths have one field), else the fixed-point scatter.
-    pub fn deterministic_for(params: &StepParams) -> P2gPath {
-        if params.separation != super::Separation::None {
-            P2gPath::Gather
-        } else {
-            P2gPath::Fixed
-        }
-    }
-
-    /// The best path that runs `params`: the gather for two-field separation (the atomic
-    /// path has one field), else [`Self::best`].
-    pub fn for_params(gpu: &GpuContext, params: &StepParams) -> P2gPath {
-        if params.separation != super::Separation::None {
-            P2gPath::Gather
-        } else {
-            Self::best(gpu)
-        }
-    }
-}
+pub use p2g_path::P2gPath;
+pub use watchdog::Watchdog;
 
 /// Bytes of a scatter path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
 /// each with floats, 32 with fixed-point word pairs; twice that for a FLIP/PIC blend); the

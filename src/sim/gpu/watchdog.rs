@@ -1,0 +1,28 @@
+//! What the step's watchdog counts and the GPU reads back between frames (`flags` of
+//! the step passes): non-finite and escaped particles, the sparse grid's need and overflow,
+//! the fixed-point P2G's range.
+
+/// What the watchdog counted (particle-steps, summed over the steps since the last read).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Watchdog {
+    pub nonfinite: u32,
+    pub escaped: u32,
+    /// The first of those steps in which a particle was counted, 0-based from the last read.
+    pub first_step: Option<u32>,
+    /// The most blocks of 4³ nodes active in one of those steps (the sparse grid's need).
+    pub active_blocks_max: u32,
+    /// Active blocks that found the grid pool full (their nodes were skipped: the steps are
+    /// wrong; grow the pool, [`super::GpuSim::fit_pool`]).
+    pub pool_overflow: u32,
+    /// Particles past the fixed-point P2G's speed bound (`GpuStep::speed_bound`; they added
+    /// nothing to the grid: the steps are wrong).
+    pub fixed_point_range: u32,
+}
+
+impl Watchdog {
+    /// Whether a step counted a particle that makes the run wrong (the pool's overflow,
+    /// which a re-run with a larger pool repairs, aside).
+    pub fn failed(&self) -> bool {
+        self.nonfinite > 0 || self.escaped > 0 || self.fixed_point_range > 0
+    }
+}
