@@ -10,7 +10,7 @@ mod common;
 use std::process::Stdio;
 
 use common::cli::{
-    assert_mentions, command, expect_error, expect_success, frames_in, splatter as run,
+    assert_mentions, command, describe, expect_error, expect_success, frames_in, splatter as run,
     splatter_env, stderr_lines,
 };
 use splatter::render::cpu::psnr;
@@ -371,4 +371,33 @@ fn a_frame_list_outside_the_scene_is_one_error_line() {
     let line = expect_error(&render_states(d, "o", &["--frames", "5-1"], &[]));
     assert_mentions(&line, &["5-1", "backwards"]);
     assert!(frames_in(&d.join("o")).is_empty());
+}
+
+/// `docs/jobs/run_openjd_local.sh`: the Open Job Description template run by the `openjd`
+/// CLI (simulate, then render tasks given frame lists with gaps), its frames exactly the
+/// listed ones and byte-identical to one process rendering them. It needs openjd-cli
+/// (`pip install openjd-cli`; `OPENJD` names the program when it is not `openjd` on the
+/// PATH), which CI does not install: without it the test says so and passes.
+#[test]
+fn the_openjd_template_gives_a_single_runs_frames() {
+    let openjd = std::env::var("OPENJD").unwrap_or_else(|_| "openjd".into());
+    if std::process::Command::new(&openjd)
+        .arg("--version")
+        .output()
+        .is_err()
+    {
+        eprintln!("skipped: no `{openjd}` program (pip install openjd-cli, or set OPENJD)");
+        return;
+    }
+    let dir = TempDir::new().unwrap();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/jobs/run_openjd_local.sh");
+    let out = std::process::Command::new(script)
+        .arg(dir.path().join("work"))
+        .env("SPLATTER", env!("CARGO_BIN_EXE_splatter"))
+        .env("OPENJD", &openjd)
+        .output()
+        .expect("the script runs");
+    assert!(out.status.success(), "{}", describe(&out));
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert!(said.contains("OK: 10 frames"), "{said}");
 }

@@ -204,13 +204,10 @@ impl Run {
             Input::States { scene, dir } => {
                 let (scene, path) = input::load_scene(scene.as_deref(), &opts)?;
                 let (frames, idle) = task_frames(&opts, scene.frame_count())?;
-                let source = match idle {
-                    Some(why) => Source::Idle(why),
-                    None => {
-                        crate::farm::check_states(dir, &frames)?;
-                        Source::States(dir.clone())
-                    }
-                };
+                let source = unless_idle(idle, || {
+                    crate::farm::check_states(dir, &frames)?;
+                    Ok(Source::States(dir.clone()))
+                })?;
                 (scene, path, frames, source)
             }
             Input::Scene(file) => {
@@ -218,13 +215,10 @@ impl Run {
                 let (frames, idle) = task_frames(&opts, scene.frame_count())?;
                 // A task with nothing to render does not build the scene (captures can
                 // take long to read).
-                let source = match idle {
-                    Some(why) => Source::Idle(why),
-                    None => {
-                        let (splats, report) = input::build_splats(&scene)?;
-                        Source::Built { splats, report }
-                    }
-                };
+                let source = unless_idle(idle, || {
+                    let (splats, report) = input::build_splats(&scene)?;
+                    Ok(Source::Built { splats, report })
+                })?;
                 (scene, path, frames, source)
             }
             Input::Ply {
@@ -236,10 +230,7 @@ impl Run {
                 let (scene, path, splats, report) =
                     input::quick_look(&opts, file, cameras.as_deref(), *camera, up.as_deref())?;
                 let (frames, idle) = task_frames(&opts, scene.frame_count())?;
-                let source = match idle {
-                    Some(why) => Source::Idle(why),
-                    None => Source::Built { splats, report },
-                };
+                let source = unless_idle(idle, || Ok(Source::Built { splats, report }))?;
                 (scene, path, frames, source)
             }
         };
@@ -305,6 +296,14 @@ impl Run {
                 Ok(Summary::default())
             }
         }
+    }
+}
+
+/// [`Source::Idle`] when `idle` gives a reason, else the source `make` prepares.
+fn unless_idle(idle: Option<String>, make: impl FnOnce() -> Result<Source>) -> Result<Source> {
+    match idle {
+        Some(why) => Ok(Source::Idle(why)),
+        None => make(),
     }
 }
 
