@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use splatter::farm::{self, FarmError};
 use splatter::gpu::BackendChoice;
 use splatter::run::{Input, RunOptions};
 use splatter::scene;
@@ -202,9 +203,20 @@ pub(crate) struct RenderArgs {
     /// Output directory (overrides the scene's `output.dir`).
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
-    /// Frames to render: `A..B` (B exclusive), `A..`, `..B` or a single frame `A`.
-    #[arg(long)]
+    /// Frames to render: `A..B` (B exclusive), `A..`, `..B`, a single frame `A`, or a
+    /// render manager's frame list of inclusive ranges (Deadline, Open Job Description):
+    /// `1-10`, `1-3,5,7-20:2`, `20-0:-5`. Only the frames named are written; a simulated
+    /// scene still simulates every frame up to the last one named.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
     pub(crate) frames: Option<String>,
+    /// Render one farm task's share of the frames: chunk I (0-based) of N consecutive
+    /// frames of the sorted frame set, I from --task-index, else SLURM_ARRAY_TASK_ID, else
+    /// JOB_COMPLETION_INDEX. A task past the last chunk renders nothing and exits 0.
+    #[arg(long, value_name = "N")]
+    pub(crate) chunk: Option<u32>,
+    /// With --chunk: this task's 0-based chunk index (instead of the environment's).
+    #[arg(long, value_name = "I", requires = "chunk")]
+    pub(crate) task_index: Option<u32>,
     /// Image width in pixels (overrides the scene's).
     #[arg(long)]
     pub(crate) width: Option<u32>,
@@ -280,7 +292,13 @@ pub(crate) struct RenderArgs {
 }
 
 impl RenderArgs {
-    pub(crate) fn into_options(self) -> RunOptions {
+    /// The run's options; the chunk's task index may come from the environment.
+    pub(crate) fn into_options(self) -> Result<RunOptions, FarmError> {
+        let env = |name: &str| std::env::var(name).ok();
+        let chunk = self
+            .chunk
+            .map(|size| farm::chunk(size, self.task_index, &env))
+            .transpose()?;
         let input = match (self.from_states, self.ply) {
             (Some(dir), _) => Input::States {
                 scene: self.scene,
@@ -294,10 +312,11 @@ impl RenderArgs {
             },
             (None, None) => Input::Scene(self.scene),
         };
-        RunOptions {
+        Ok(RunOptions {
             input,
             out: self.out,
             frames: self.frames,
+            chunk,
             width: self.width,
             height: self.height,
             quality: self.quality,
@@ -309,6 +328,6 @@ impl RenderArgs {
             checkpoint_every: self.checkpoint_every,
             video: self.video,
             fragments: self.fragments,
-        }
+        })
     }
 }

@@ -13,6 +13,7 @@ pub mod derive;
 pub mod farm;
 pub mod files;
 pub mod fragments;
+pub mod frames;
 pub mod gpu;
 pub mod limits;
 pub mod output;

@@ -36,7 +36,7 @@ fn main() -> ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         None => render(cli.backend, RunOptions::default()),
-        Some(Command::Render(args)) => render(cli.backend, args.into_options()),
+        Some(Command::Render(args)) => render(cli.backend, args.into_options()?),
         Some(Command::Inspect {
             file,
             support_height,
@@ -220,16 +220,16 @@ fn inspect(
 fn render(backend: Option<BackendChoice>, opts: RunOptions) -> Result<()> {
     let fail_at = fail_hook_frame()?;
     let run = Run::prepare(opts)?;
+    if let Some(why) = run.idle() {
+        // A farm task with no frames: done, without a GPU.
+        eprintln!("{why}");
+        return Ok(());
+    }
     let gpu = GpuContext::new(backend)?;
     let mut progress: Option<Progress> = None;
     let mut on_event = |event: Event| match event {
         Event::Note(line) => eprintln!("{line}"),
-        Event::Frames(frames) => {
-            progress = Some(Progress::new(
-                u64::from(frames.end - frames.start),
-                "render",
-            ))
-        }
+        Event::Frames(frames) => progress = Some(Progress::new(frames.len() as u64, "render")),
         Event::FrameStart(frame) => {
             if fail_at == Some(frame) {
                 eprintln!("SPLATTER_FAIL_AT_FRAME: exiting abruptly before frame {frame}");

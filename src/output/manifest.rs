@@ -9,31 +9,56 @@ use std::time::{Duration, Instant};
 use serde::{Deserialize, Serialize};
 
 use super::{write_atomically, OutputError};
+use crate::frames::FrameSet;
 
 /// `OUT_DIR/manifest.json` for a run of all `scene_frames` frames; for a part,
-/// `OUT_DIR/manifest_A-B.json` (frames A..B), so that the jobs of a render farm writing
-/// into one folder each keep their own.
-pub fn manifest_path(dir: &Path, frames: std::ops::Range<u32>, scene_frames: u32) -> PathBuf {
-    if frames.start == 0 && frames.end == scene_frames {
-        dir.join("manifest.json")
-    } else {
-        dir.join(format!(
-            "manifest_{:05}-{:05}.json",
-            frames.start, frames.end
-        ))
+/// `OUT_DIR/manifest_A-B.json` (frames A..B, B exclusive), so that the jobs of a render
+/// farm writing into one folder each keep their own. A set with gaps is named by its span
+/// and a hash of its frames, `manifest_A-B_HHHHHHHH.json`: two sets can share a span
+/// (`0-9:3` and `0,9`), and a farm's tasks render different sets.
+pub fn manifest_path(dir: &Path, frames: &FrameSet, scene_frames: u32) -> PathBuf {
+    let span = frames.span();
+    match frames.as_range() {
+        Some(r) if r == (0..scene_frames) => dir.join("manifest.json"),
+        Some(_) => dir.join(format!("manifest_{:05}-{:05}.json", span.start, span.end)),
+        None => dir.join(format!(
+            "manifest_{:05}-{:05}_{:08x}.json",
+            span.start,
+            span.end,
+            frames_hash(frames)
+        )),
     }
 }
 
-/// Bumped when fields change meaning.
-pub const MANIFEST_FORMAT: u32 = 1;
+/// FNV-1a 32 of the frames' numbers: stable across builds and platforms, unlike std's
+/// hasher, so a re-run of a task finds its own manifest again.
+fn frames_hash(frames: &FrameSet) -> u32 {
+    let mut h: u32 = 0x811c_9dc5;
+    for b in frames.iter().flat_map(u32::to_le_bytes) {
+        h = (h ^ u32::from(b)).wrapping_mul(0x0100_0193);
+    }
+    h
+}
+
+/// Bumped when fields change meaning: 2 when `settings.frames` became the span of a frame
+/// set that may have gaps (then listed in `settings.frame_list`).
+pub const MANIFEST_FORMAT: u32 = 2;
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Settings {
     pub width: u32,
     pub height: u32,
     pub fps: f32,
-    /// The half-open frame range of this run (`--frames`).
+    /// The frames of this run (`--frames`, `--chunk`) as a half-open range: its first
+    /// frame and one past its last. With `frame_list`, only the frames listed there.
     pub frames: [u32; 2],
+    /// The frames rendered, when they have gaps (`--frames 1-3,5,7-20:2`), in the render
+    /// managers' syntax (inclusive ranges, `:step`).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub frame_list: Option<String>,
+    /// `--chunk`: this task's share of the frames.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub chunk: Option<ChunkSettings>,
     /// Frames in the scene.
     pub scene_frames: u32,
     pub deterministic: bool,
@@ -61,6 +86,15 @@ pub struct Settings {
     pub export_spz: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export_particles: Option<PathBuf>,
+}
+
+/// A farm task's chunk: `size` frames a chunk, the task's 0-based `index`, and where that
+/// index came from (`--task-index`, `SLURM_ARRAY_TASK_ID`, `JOB_COMPLETION_INDEX`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ChunkSettings {
+    pub size: u32,
+    pub index: u32,
+    pub index_from: String,
 }
 
 /// One rendered frame's timings (wall clock on the rendering thread, milliseconds).
@@ -197,6 +231,26 @@ mod tests {
     use super::*;
 
     #[test]
+    fn sets_with_gaps_get_their_own_manifest_names() {
+        let name = |spec: &str| {
+            let set = FrameSet::parse(Some(spec), 20).unwrap();
+            let path = manifest_path(Path::new("o"), &set, 20);
+            path.file_name().unwrap().to_string_lossy().into_owned()
+        };
+        assert_eq!(name("0-19"), "manifest.json");
+        assert_eq!(name("4-7"), "manifest_00004-00008.json");
+        let (a, b) = (name("0-9:3"), name("0,9"));
+        assert!(
+            a.starts_with("manifest_00000-00010_") && a.ends_with(".json"),
+            "{a}"
+        );
+        assert!(b.starts_with("manifest_00000-00010_"), "{b}");
+        assert_ne!(a, b, "two sets with one span");
+        assert_eq!(a, name("0,3,6,9"), "the same set, the same name");
+        assert_eq!(a.len(), "manifest_00000-00010_12345678.json".len());
+    }
+
+    #[test]
     fn manifest_round_trips_and_is_written_atomically() {
         let dir = tempfile::tempdir().unwrap();
         let settings = Settings {
@@ -207,9 +261,10 @@ mod tests {
             ..Default::default()
         };
         let m = Manifest::new("s.json".into(), 0xabc, "llvmpipe".into(), settings);
-        let path = manifest_path(dir.path(), 0..3, 3);
+        let path = manifest_path(dir.path(), &FrameSet::from(0..3), 3);
         assert!(path.ends_with("manifest.json"));
-        assert!(manifest_path(dir.path(), 1..3, 3).ends_with("manifest_00001-00003.json"));
+        let part = manifest_path(dir.path(), &FrameSet::from(1..3), 3);
+        assert!(part.ends_with("manifest_00001-00003.json"));
         let mut w = ManifestWriter::new(path, m, Instant::now());
         w.frame_done(
             0,

@@ -27,30 +27,27 @@ pub(super) fn execute(
     let dir = scene.output_dir();
     create_dir(&dir, "output directory")?;
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
-    let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
+    let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
     limits::check_gpu(gpu, &limits::render_needs(0, width, height))?;
     if job.opts.resume {
         check_manifest_for_resume(&manifest_file, hash)?;
     }
     on_event(Event::Note(format!(
-        "states: {}, {}×{}, frames {}..{} → {}",
+        "states: {}, {}×{}, frames {} → {}",
         states.display(),
         width,
         height,
-        job.frames.start,
-        job.frames.end,
+        job.frames,
         dir.display()
     )));
     let settings = Settings {
         width,
         height,
         fps: scene.output.fps,
-        frames: [job.frames.start, job.frames.end],
-        scene_frames: scene.frame_count(),
         deterministic: job.opts.deterministic,
         from_states: Some(states.to_path_buf()),
-        ..Default::default()
+        ..job.frame_settings()
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
@@ -76,9 +73,10 @@ struct StateFrames<'a> {
 
 impl StateFrames<'_> {
     fn run(&mut self, on_event: &mut dyn FnMut(Event)) -> Result<()> {
-        for frame in self.job.frames.clone() {
+        let job = self.job;
+        for frame in job.frames.iter() {
             on_event(Event::FrameStart(frame));
-            if self.job.opts.resume && frame_path(&self.sink.dir, frame).is_file() {
+            if job.opts.resume && frame_path(&self.sink.dir, frame).is_file() {
                 on_event(Event::FrameDone {
                     frame,
                     skipped: true,

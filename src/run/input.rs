@@ -1,42 +1,14 @@
 //! A run's input: the scene file (or the default scene, or a quick look at a capture) with
-//! the command line's overrides, its camera path and the frames to render.
+//! the command line's overrides, and its camera path.
 
-use std::ops::Range;
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use glam::Vec3;
 
-use super::{Input, RunOptions};
+use super::RunOptions;
 use crate::render::Splats;
 use crate::scene::{self, BuildReport, CameraPath, Scene};
-
-/// Parse `A..B`, `A..`, `..B` or `A` against `count` frames into a half-open range.
-pub fn frame_range(spec: Option<&str>, count: u32) -> Result<Range<u32>> {
-    let Some(spec) = spec else {
-        return Ok(0..count);
-    };
-    let num = |s: &str, default: u32| -> Result<u32> {
-        if s.trim().is_empty() {
-            Ok(default)
-        } else {
-            s.trim()
-                .parse()
-                .with_context(|| format!("--frames {spec:?}: {s:?} is not a frame number"))
-        }
-    };
-    let range = match spec.split_once("..") {
-        Some((a, b)) => num(a, 0)?..num(b, count)?,
-        None => {
-            let a = num(spec, 0)?;
-            a..a.saturating_add(1)
-        }
-    };
-    if range.start >= range.end || range.end > count {
-        bail!("--frames {spec:?}: expected a non-empty range within 0..{count} (the scene has {count} frames)");
-    }
-    Ok(range)
-}
 
 /// `--width`/`--height` within what the renderer supports.
 pub(super) fn check_image_size(opts: &RunOptions) -> Result<()> {
@@ -76,26 +48,13 @@ fn log_up_warnings(scene: &Scene) {
     }
 }
 
-/// The scene, its camera path and its Gaussians.
-pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
-    let (scene, path, splats, report) = match &opts.input {
-        Input::Ply {
-            file,
-            cameras,
-            camera,
-            up,
-        } => quick_look(opts, file, cameras.as_deref(), *camera, up.as_deref())?,
-        Input::Scene(file) => {
-            let (scene, path) = load_scene(file.as_deref(), opts)?;
-            let (splats, report) = scene.build_splats()?;
-            (scene, path, splats, report)
-        }
-        Input::States { .. } => unreachable!("states are loaded per frame"),
-    };
+/// The scene's Gaussians, its build warnings logged.
+pub(super) fn build_splats(scene: &Scene) -> Result<(Splats, BuildReport)> {
+    let (splats, report) = scene.build_splats()?;
     for w in report.warnings() {
         log::warn!("{w}");
     }
-    Ok((scene, path, splats, report))
+    Ok((splats, report))
 }
 
 /// `--ply FILE`: the capture alone, stood upright (on `up`, else on the estimate, which
@@ -103,7 +62,7 @@ pub(super) fn build(opts: &RunOptions) -> Result<(Scene, CameraPath, Splats, Bui
 /// bounds (docs/captures.md), or seen from a camera of an INRIA `cameras.json`. Those
 /// cameras were posed in the capture's own frame (the trainer's), so with them the
 /// capture is drawn untouched: standing it upright would move it out of their view.
-fn quick_look(
+pub(super) fn quick_look(
     opts: &RunOptions,
     ply: &Path,
     cameras: Option<&Path>,
@@ -134,7 +93,7 @@ fn quick_look(
     scene.name = stem;
     scene.with_overrides(opts.out.clone(), None, None)?;
     log_up_warnings(&scene);
-    let (splats, report) = scene.build_splats()?;
+    let (splats, report) = build_splats(&scene)?;
     let path = match cameras {
         Some(file) => {
             let cameras = scene::from_cameras_json(file, opts.width, opts.height)?;

@@ -20,17 +20,17 @@ pub mod preview;
 mod scene_run;
 
 pub use fragments::FragmentLog;
-pub use input::frame_range;
 
-use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Result};
 
+use crate::farm::Chunk;
 use crate::fragments::FragmentSummary;
+use crate::frames::FrameSet;
 use crate::gpu::GpuContext;
-use crate::output::manifest::{FrameTiming, Manifest, ManifestWriter, Settings};
+use crate::output::manifest::{ChunkSettings, FrameTiming, Manifest, ManifestWriter, Settings};
 use crate::output::{frame_path, FrameWriter};
 use crate::render::gpu::{FrameTimings, RenderedImage};
 use crate::render::Splats;
@@ -65,8 +65,11 @@ pub struct RunOptions {
     pub input: Input,
     /// Output directory (overrides the scene's `output.dir`).
     pub out: Option<PathBuf>,
-    /// Frames to render: `A..B`, `A..`, `..B` or `A` (see [`frame_range`]).
+    /// Frames to render: `A..B` (B exclusive), `A..`, `..B`, `A`, or a list of inclusive
+    /// ranges `1-3,5,7-20:2` (see [`FrameSet::parse`]).
     pub frames: Option<String>,
+    /// Render only this farm task's chunk of those frames.
+    pub chunk: Option<Chunk>,
     pub width: Option<u32>,
     pub height: Option<u32>,
     pub quality: Quality,
@@ -108,6 +111,7 @@ impl Default for RunOptions {
             input: Input::Scene(None),
             out: None,
             frames: None,
+            chunk: None,
             width: None,
             height: None,
             quality: Quality::Standard,
@@ -129,7 +133,7 @@ pub enum Event {
     /// A line for the user (the adapter, the scene's size, resume decisions, …).
     Note(String),
     /// The frame loop starts: `frames` is what will be rendered or skipped.
-    Frames(Range<u32>),
+    Frames(FrameSet),
     /// Frame `frame` is about to be simulated (or loaded) and rendered.
     FrameStart(u32),
     /// Frame `frame` is rendered (queued for writing), or was already written (`skipped`,
@@ -177,8 +181,13 @@ pub struct Run {
 }
 
 enum Source {
-    Built { splats: Splats, report: BuildReport },
+    Built {
+        splats: Splats,
+        report: BuildReport,
+    },
     States(PathBuf),
+    /// Nothing to render, and why (a farm task past the last chunk).
+    Idle(String),
 }
 
 impl Run {
@@ -194,16 +203,42 @@ impl Run {
         let (scene, path, frames, source) = match &opts.input {
             Input::States { scene, dir } => {
                 let (scene, path) = input::load_scene(scene.as_deref(), &opts)?;
-                let frames = frame_range(opts.frames.as_deref(), scene.frame_count())?;
-                crate::farm::check_states(dir, frames.clone())?;
-                (scene, path, frames, Source::States(dir.clone()))
+                let (frames, idle) = task_frames(&opts, scene.frame_count())?;
+                let source = unless_idle(idle, || {
+                    crate::farm::check_states(dir, &frames)?;
+                    Ok(Source::States(dir.clone()))
+                })?;
+                (scene, path, frames, source)
             }
-            Input::Scene(_) | Input::Ply { .. } => {
-                let (scene, path, splats, report) = input::build(&opts)?;
-                let frames = frame_range(opts.frames.as_deref(), scene.frame_count())?;
-                (scene, path, frames, Source::Built { splats, report })
+            Input::Scene(file) => {
+                let (scene, path) = input::load_scene(file.as_deref(), &opts)?;
+                let (frames, idle) = task_frames(&opts, scene.frame_count())?;
+                // A task with nothing to render does not build the scene (captures can
+                // take long to read).
+                let source = unless_idle(idle, || {
+                    let (splats, report) = input::build_splats(&scene)?;
+                    Ok(Source::Built { splats, report })
+                })?;
+                (scene, path, frames, source)
+            }
+            Input::Ply {
+                file,
+                cameras,
+                camera,
+                up,
+            } => {
+                let (scene, path, splats, report) =
+                    input::quick_look(&opts, file, cameras.as_deref(), *camera, up.as_deref())?;
+                let (frames, idle) = task_frames(&opts, scene.frame_count())?;
+                let source = unless_idle(idle, || Ok(Source::Built { splats, report }))?;
+                (scene, path, frames, source)
             }
         };
+        if opts.video.is_some() && !frames.is_empty() && frames.as_range().is_none() {
+            bail!(
+                "--video reads the frames as one numbered sequence, and frames {frames} have gaps; render them, then assemble the video over a range without gaps (e.g. the whole scene with --resume --video)"
+            );
+        }
         let job = Job {
             opts,
             started,
@@ -220,9 +255,18 @@ impl Run {
         &self.job.scene
     }
 
-    /// The frames this run renders.
-    pub fn frames(&self) -> Range<u32> {
-        self.job.frames.clone()
+    /// The frames this run renders (none for an idle farm task).
+    pub fn frames(&self) -> &FrameSet {
+        &self.job.frames
+    }
+
+    /// Why this run renders nothing (a farm task past the last chunk); `execute` then
+    /// only reports it, and a caller need not open a GPU.
+    pub fn idle(&self) -> Option<&str> {
+        match &self.source {
+            Source::Idle(why) => Some(why),
+            _ => None,
+        }
     }
 
     /// The camera of every frame.
@@ -235,7 +279,7 @@ impl Run {
     pub fn splats(&self) -> Option<&Splats> {
         match &self.source {
             Source::Built { splats, .. } => Some(splats),
-            Source::States(_) => None,
+            Source::States(_) | Source::Idle(_) => None,
         }
     }
 
@@ -247,8 +291,52 @@ impl Run {
                 scene_run::execute(job, splats, report, gpu, on_event)
             }
             Source::States(dir) => from_states::execute(job, &dir, gpu, on_event),
+            Source::Idle(why) => {
+                on_event(Event::Note(why));
+                Ok(Summary::default())
+            }
         }
     }
+}
+
+/// [`Source::Idle`] when `idle` gives a reason, else the source `make` prepares.
+fn unless_idle(idle: Option<String>, make: impl FnOnce() -> Result<Source>) -> Result<Source> {
+    match idle {
+        Some(why) => Ok(Source::Idle(why)),
+        None => make(),
+    }
+}
+
+/// The frames of `--frames`, and with `--chunk` this task's share of them; when the task
+/// has no share, an empty set and the reason.
+fn task_frames(opts: &RunOptions, count: u32) -> Result<(FrameSet, Option<String>)> {
+    let set = FrameSet::parse(opts.frames.as_deref(), count)?;
+    let Some(c) = &opts.chunk else {
+        return Ok((set, None));
+    };
+    if let Some(w) = &c.warning {
+        log::warn!("{w}");
+    }
+    if let Some(part) = set.chunk(c.size, c.index) {
+        return Ok((part, None));
+    }
+    // Arrays are often sized generously (a fixed 0-99, or one task per frame before the
+    // chunk size was raised): a task past the end has nothing to do, which is not a
+    // failure the farm should retry.
+    let tasks = match set.chunk_count(c.size) {
+        1 => "1 chunk, task 0".to_string(),
+        n => format!("{n} chunks, tasks 0-{}", n - 1),
+    };
+    Ok((
+        FrameSet::default(),
+        Some(format!(
+            "--chunk {}: task {} (from {}) has nothing to render: the {} frames {set} make {tasks}",
+            c.size,
+            c.index,
+            c.index_from,
+            set.len(),
+        )),
+    ))
 }
 
 /// The parts of a prepared run both input modes use.
@@ -258,10 +346,31 @@ struct Job {
     ffmpeg: Option<PathBuf>,
     scene: Scene,
     path: CameraPath,
-    frames: Range<u32>,
+    frames: FrameSet,
 }
 
 impl Job {
+    /// The manifest's record of the frames: their span, the list when it has gaps, the
+    /// chunk.
+    fn frame_settings(&self) -> Settings {
+        let span = self.frames.span();
+        Settings {
+            frames: [span.start, span.end],
+            frame_list: self
+                .frames
+                .as_range()
+                .is_none()
+                .then(|| self.frames.to_string()),
+            chunk: self.opts.chunk.as_ref().map(|c| ChunkSettings {
+                size: c.size,
+                index: c.index,
+                index_from: c.index_from.to_string(),
+            }),
+            scene_frames: self.scene.frame_count(),
+            ..Default::default()
+        }
+    }
+
     /// How the manifest names the input.
     fn input_name(&self) -> String {
         match &self.opts.input {
@@ -336,9 +445,9 @@ impl Job {
         if let (Some(ffmpeg), Some(video)) = (&self.ffmpeg, &self.opts.video) {
             on_event(Event::Note(format!("video: {} (ffmpeg)", video.display())));
             let fps = self.scene.output.fps;
-            if let Err(e) =
-                crate::output::video::assemble(ffmpeg, &dir, self.frames.clone(), fps, video)
-            {
+            // Checked in `prepare`: a video's frames have no gaps.
+            let frames = self.frames.span();
+            if let Err(e) = crate::output::video::assemble(ffmpeg, &dir, frames, fps, video) {
                 let e = anyhow::Error::from(e);
                 let _ = manifest.finish(Some(one_line(&e)));
                 return Err(e);

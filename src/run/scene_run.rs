@@ -1,6 +1,5 @@
 //! A built scene run frame by frame: simulate, checkpoint, derive, render, write.
 
-use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -61,7 +60,7 @@ pub(super) fn execute(
         create_dir(d, "particle export directory")?;
     }
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
-    let manifest_file = manifest_path(&dir, job.frames.clone(), scene.frame_count());
+    let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
     let p2g = match &setup {
         Some(s) if opts.deterministic => P2gPath::deterministic_for(&s.params),
@@ -89,21 +88,20 @@ pub(super) fn execute(
         check_manifest_for_resume(&manifest_file, hash)?;
     }
     let first_missing = if opts.resume {
-        job.frames.clone().find(|f| !job.frame_done(&dir, *f))
+        job.frames.iter().find(|f| !job.frame_done(&dir, *f))
     } else {
-        Some(job.frames.start)
+        job.frames.first()
     };
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
     for note in &scene.up_notes {
         on_event(Event::Note(note.clone()));
     }
     on_event(Event::Note(format!(
-        "scene: {} Gaussians, {}×{}, frames {}..{} → {}",
+        "scene: {} Gaussians, {}×{}, frames {} → {}",
         splats.len(),
         width,
         height,
-        job.frames.start,
-        job.frames.end,
+        job.frames,
         dir.display()
     )));
     let mut renderer = GpuRenderer::new(gpu);
@@ -153,8 +151,6 @@ pub(super) fn execute(
         width,
         height,
         fps: scene.output.fps,
-        frames: [job.frames.start, job.frames.end],
-        scene_frames: scene.frame_count(),
         deterministic: opts.deterministic,
         gaussians: splats.len(),
         particles: setup.as_ref().map(|s| s.particles.len()),
@@ -171,6 +167,7 @@ pub(super) fn execute(
         export_ply: opts.export_ply.clone(),
         export_spz: opts.export_spz.clone(),
         export_particles: opts.export_particles.clone(),
+        ..job.frame_settings()
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
@@ -270,12 +267,8 @@ fn resume_state(
         }
         _ => None,
     };
-    let frames = &job.frames;
     on_event(Event::Note(match (first_missing, &state) {
-        (None, _) => format!(
-            "resume: frames {}..{} are all written already",
-            frames.start, frames.end
-        ),
+        (None, _) => format!("resume: frames {} are all written already", job.frames),
         (Some(m), Some(cp)) => format!(
             "resume: continuing from the checkpoint at frame {} (first missing frame {m})",
             cp.frame
@@ -418,21 +411,25 @@ struct Frames<'a> {
 }
 
 impl Frames<'_> {
-    /// Frame f shows the state after f · steps_per_frame steps, so a range that starts
-    /// later simulates the frames before it without rendering them.
+    /// Frame f shows the state after f · steps_per_frame steps, so a simulation steps
+    /// through every frame up to the last one asked for (from frame 0 or the checkpoint),
+    /// and renders only the frames asked for; a frame set with gaps saves rendering, not
+    /// simulating. Without a simulation only the frames asked for are visited.
     fn run(
         &mut self,
         mut sim: Option<&mut Simulation>,
         first_sim: u32,
         on_event: &mut dyn FnMut(Event),
     ) -> Result<()> {
-        let frames: Range<u32> = self.job.frames.clone();
-        let first = if sim.is_some() {
-            first_sim
-        } else {
-            frames.start
+        let frames = &self.job.frames;
+        let Some(last) = frames.last() else {
+            return Ok(());
         };
-        for frame in first..frames.end {
+        let visited: Vec<u32> = match sim {
+            Some(_) => (first_sim..=last).collect(),
+            None => frames.iter().collect(),
+        };
+        for frame in visited {
             on_event(Event::FrameStart(frame));
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
@@ -445,7 +442,7 @@ impl Frames<'_> {
                     self.checkpoint(sim, frame)?;
                 }
                 timing.simulate_ms = t0.elapsed().as_secs_f64() * 1e3;
-                if frame < frames.start {
+                if !self.job.frames.contains(frame) {
                     continue;
                 }
             }

@@ -2,8 +2,9 @@
 //!
 //! Every run removes `RUST_LOG` (so the binary's own filter applies: warnings only),
 //! `RUST_BACKTRACE` (so that a panic always prints its `RUST_BACKTRACE` hint, which
-//! [`assert_no_panic`] looks for, rather than a backtrace) and the test hook
-//! `SPLATTER_FAIL_AT_FRAME` (which only the tests that want a crash set).
+//! [`assert_no_panic`] looks for, rather than a backtrace), the test hook
+//! `SPLATTER_FAIL_AT_FRAME` (which only the tests that want a crash set) and the render
+//! managers' task indices (so that tests run as a Slurm array task behave as anywhere).
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -15,7 +16,11 @@ pub fn command(cwd: &Path, args: &[&str]) -> Command {
         .current_dir(cwd)
         .env_remove("RUST_LOG")
         .env_remove("RUST_BACKTRACE")
-        .env_remove("SPLATTER_FAIL_AT_FRAME");
+        .env_remove("SPLATTER_FAIL_AT_FRAME")
+        .env_remove("SLURM_ARRAY_TASK_MIN");
+    for var in splatter::farm::TASK_INDEX_VARS {
+        cmd.env_remove(var);
+    }
     cmd
 }
 
