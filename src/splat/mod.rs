@@ -6,6 +6,7 @@ pub mod assets;
 pub mod codec;
 pub mod compressed_ply;
 pub mod formats;
+pub mod gltf;
 pub mod inspect;
 pub mod ply;
 pub mod procedural;
