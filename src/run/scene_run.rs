@@ -170,6 +170,7 @@ pub(super) fn execute(
         from_states: None,
         export_ply: opts.export_ply.clone(),
         export_spz: opts.export_spz.clone(),
+        export_glb: opts.export_glb.clone(),
         export_particles: opts.export_particles.clone(),
     };
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);

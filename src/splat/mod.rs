@@ -5,6 +5,7 @@ pub mod antimatter;
 pub mod assets;
 pub mod codec;
 pub mod compressed_ply;
+pub mod convert;
 pub mod formats;
 pub mod gltf;
 pub mod inspect;

@@ -140,7 +140,7 @@ fn no_splats(json: &Value, file: &str) -> Result<Builder, SplatError> {
         file: file.to_string(),
         format: Format::Gltf,
         what: format!(
-            "file without KHR_gaussian_splatting ({meshes} meshes, none with a primitive that has the extension; extensionsUsed: {used})"
+            "file without KHR_gaussian_splatting (no primitive of its {meshes} mesh(es) has the extension; extensionsUsed: {used})"
         ),
         expected: "Gaussian splats: a POINTS primitive with the KHR_gaussian_splatting extension",
     })
@@ -357,7 +357,14 @@ fn decode_attributes(
     let degree = sh_degree(attributes, what, file)?;
     let read = |name: &str, components: usize, allowed: &[Allowed], n: Option<usize>| {
         let index = required(attributes, name, what, file)?;
-        let a = accessor(doc, index, name, components, allowed, file)?;
+        let a = accessor(
+            doc,
+            index,
+            &format!("{what}: {name}"),
+            components,
+            allowed,
+            file,
+        )?;
         match n {
             Some(n) if a.count != n => Err(damaged(
                 file,
@@ -369,8 +376,8 @@ fn decode_attributes(
             _ => Ok((a.floats(), a.count)),
         }
     };
-    let (position, n) = read("POSITION", 3, FLOAT_ONLY, None)?;
-    let n = Some(n);
+    let (position, count) = read("POSITION", 3, FLOAT_ONLY, None)?;
+    let n = Some(count);
     let rotation = read(ROTATION, 4, ROTATION_TYPES, n)?.0;
     let scale = read(SCALE, 3, SCALE_TYPES, n)?.0;
     let opacity = read(OPACITY, 1, OPACITY_TYPES, n)?.0;
@@ -380,8 +387,7 @@ fn decode_attributes(
             coefficients.push(read(&sh_attribute(l, c), 3, FLOAT_ONLY, n)?.0);
         }
     }
-    let labels = labels(doc, prim, attributes, n.unwrap_or(0), what, file)?;
-    let count = n.unwrap_or(0);
+    let labels = labels(doc, prim, attributes, count, what, file)?;
     let mut b = Builder::new(count, degree);
     let mut sh = vec![0.0; sh_coeff_count(degree) * 3];
     let mut kept = Vec::new();
@@ -461,7 +467,14 @@ fn labels(
     let Some(index) = attributes.get(LABEL_ATTRIBUTE).and_then(Value::as_u64) else {
         return Ok(None);
     };
-    let a = accessor(doc, index, LABEL_ATTRIBUTE, 1, LABEL_TYPES, file)?;
+    let a = accessor(
+        doc,
+        index,
+        &format!("{what}: {LABEL_ATTRIBUTE}"),
+        1,
+        LABEL_TYPES,
+        file,
+    )?;
     if a.count != n {
         return Err(damaged(
             file,
