@@ -421,3 +421,104 @@ fn glb_of(json: &serde_json::Value, bin: &[u8]) -> Vec<u8> {
     glb.extend(bin);
     glb
 }
+
+/// Standard base64 with padding (for building `.gltf` data URIs here).
+fn base64(bytes: &[u8]) -> String {
+    const ABC: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+        for j in 0..4 {
+            out.push(if j <= chunk.len() {
+                ABC[(n >> (18 - 6 * j) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
+/// The GLB fixture as `.gltf` JSON, its buffer once as a base64 data URI and once as a
+/// `.bin` file beside it (named with a space, escaped in the URI): both read as the GLB.
+#[test]
+fn gltf_json_with_a_data_uri_or_an_adjacent_bin_reads_as_the_glb() {
+    let glb = std::fs::read(fixture("donut_300_sh3.glb")).unwrap();
+    let (from_glb, _) = read_splats(&fixture("donut_300_sh3.glb")).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin = &glb[20 + json_len + 8..];
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("the data.bin"), bin).unwrap();
+    for (name, uri) in [
+        (
+            "embedded.gltf",
+            format!("data:application/octet-stream;base64,{}", base64(bin)),
+        ),
+        ("adjacent.gltf", "the%20data.bin".to_string()),
+    ] {
+        json["buffers"][0]["uri"] = uri.into();
+        let path = dir.path().join(name);
+        std::fs::write(&path, serde_json::to_vec_pretty(&json).unwrap()).unwrap();
+        let (cloud, report) = read_splats(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(report.variant, "glTF JSON", "{name}");
+        assert_eq!(cloud, from_glb, "{name}");
+    }
+}
+
+/// A node's transform places its splats (glTF: the mesh's values are in the node's local
+/// frame): the fixture under a node turned a quarter turn about y, scaled by 2 and moved
+/// reads as the fixture so moved, colours turned with it. An uneven scale is refused.
+#[test]
+fn a_node_transform_places_the_splats_and_an_uneven_scale_is_refused() {
+    use glam::{Mat3, Quat};
+    use splatter::splat::sh::eval;
+    let (plain, _) = read_splats(&fixture("donut_300_sh3.glb")).unwrap();
+    let glb = std::fs::read(fixture("donut_300_sh3.glb")).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let bin = glb[20 + json_len + 8..].to_vec();
+    let turn = Quat::from_rotation_y(std::f32::consts::FRAC_PI_2);
+    json["nodes"][0]["rotation"] = serde_json::json!(turn.to_array());
+    json["nodes"][0]["scale"] = serde_json::json!([2.0, 2.0, 2.0]);
+    json["nodes"][0]["translation"] = serde_json::json!([1.0, 2.0, 3.0]);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("placed.glb");
+    std::fs::write(&path, glb_of(&json, &bin)).unwrap();
+    let (placed, _) = read_splats(&path).unwrap();
+    // In the PLY frame the reader holds: glTF's frame turned half a turn about z.
+    let h = Mat3::from_diagonal(Vec3::new(-1.0, -1.0, 1.0));
+    let m = h * Mat3::from_quat(turn) * h;
+    let t = h * Vec3::new(1.0, 2.0, 3.0);
+    let q = Quat::from_mat3(&m);
+    let d = Vec3::new(0.3, -0.5, 0.8).normalize();
+    for i in 0..plain.len() {
+        let want = m * (2.0 * plain.positions[i]) + t;
+        assert!(
+            (placed.positions[i] - want).length() < 1e-5,
+            "{i}: position"
+        );
+        assert!(
+            (placed.scales[i] - 2.0 * plain.scales[i])
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        assert!(placed.rotations[i].dot(q * plain.rotations[i]).abs() > 1.0 - 1e-5);
+        let seen = eval(3, placed.sh_of(i), m * d);
+        let was = eval(3, plain.sh_of(i), d);
+        assert!((seen - was).length() < 1e-4, "{i}: colour {seen} vs {was}");
+    }
+    json["nodes"][0]["scale"] = serde_json::json!([2.0, 1.0, 2.0]);
+    std::fs::write(&path, glb_of(&json, &bin)).unwrap();
+    let e = read_splats(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("placed.glb") && e.contains("uniform positive scale"),
+        "{e}"
+    );
+}

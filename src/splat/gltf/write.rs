@@ -104,9 +104,24 @@ impl Layout {
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
         self.bin.resize(self.bin.len().next_multiple_of(4), 0);
-        self.views.push(json!({
+        let mut view = json!({
             "buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": ARRAY_BUFFER,
-        }));
+        });
+        // An element narrower than 4 bytes is padded to 4: glTF aligns vertex attributes so.
+        let size = match component {
+            UNSIGNED_BYTE => 1,
+            UNSIGNED_SHORT => 2,
+            _ => 4,
+        };
+        let components = match kind {
+            "VEC4" => 4,
+            "VEC3" => 3,
+            _ => 1,
+        };
+        if size * components < 4 {
+            view["byteStride"] = json!(4);
+        }
+        self.views.push(view);
         let mut accessor = json!({
             "bufferView": self.views.len() - 1, "componentType": component, "count": count, "type": kind,
         });
@@ -195,7 +210,12 @@ fn primitive(c: &GaussianCloud, out: &mut Layout) -> Value {
         }},
     });
     if !c.labels.is_empty() {
-        let bytes: Vec<u8> = c.labels.iter().flat_map(|l| l.to_le_bytes()).collect();
+        let bytes: Vec<u8> = c
+            .labels
+            .iter()
+            .flat_map(|l| [l.to_le_bytes(), [0, 0]])
+            .flatten()
+            .collect();
         put(
             LABEL_ATTRIBUTE,
             out.add(&bytes, n, UNSIGNED_SHORT, "SCALAR", Value::Null),
