@@ -32,7 +32,7 @@ pub(crate) enum Command {
     /// Describe a splat file of any format: counts, robust bounds, floaters, opacity and
     /// scale, the estimated up axis and support, and the transform that stands it upright.
     Inspect {
-        /// The capture (PLY, compressed.ply, .splat, .spz, SOG folder or .sog).
+        /// The capture (PLY, compressed.ply, .splat, .spz, SOG folder or .sog, .glb/.gltf).
         file: PathBuf,
         /// Height of the support in the suggested transform.
         #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -44,6 +44,19 @@ pub(crate) enum Command {
         /// Default: a cameras.json next to the capture, when there is one.
         #[arg(long, value_name = "FILE")]
         cameras: Option<PathBuf>,
+    },
+    /// Convert a splat file of any format we read (PLY, compressed.ply, SPZ, SOG, .splat,
+    /// glTF/GLB) into one we write, chosen by OUT's extension: .ply, .spz, .splat or .glb
+    /// (docs/formats.md). Prints one line: counts, formats, size, what was dropped.
+    Convert {
+        /// The file to read (or a SOG folder).
+        input: PathBuf,
+        /// The file to write (replaced atomically if it exists).
+        output: PathBuf,
+        /// SPZ version to write for a .spz output (3: gzip, read by every SPZ reader; 4:
+        /// zstd per stream).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(3..=4))]
+        spz_version: u32,
     },
     /// Count the pieces of particle point clouds (PLY with x, y, z: `render
     /// --export-particles` files or another solver's): particles closer than the link
@@ -236,6 +249,11 @@ pub(crate) struct RenderArgs {
     /// magnitude smaller than PLY, opened by web viewers): DIR/frame_00000.spz, …
     #[arg(long, value_name = "DIR")]
     pub(crate) export_spz: Option<PathBuf>,
+    /// Also write each rendered frame's Gaussians as glTF 2.0 GLB with
+    /// KHR_gaussian_splatting (the z-up world turned into glTF's y-up; region labels as the
+    /// attribute _SPLATTER_LABEL): DIR/frame_00000.glb, …
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export_glb: Option<PathBuf>,
     /// Also write each rendered frame's MPM particles (position, velocity, mass, volume,
     /// NACC hardening state log Jᴾ, material, object) as a binary PLY point cloud:
     /// DIR/frame_00000.ply, … (docs/formats.md, "Particle files"; `splatter fragments`
@@ -278,7 +296,7 @@ pub(crate) struct RenderArgs {
     /// Render-only: take each frame's Gaussians from DIR/frame_NNNNN.ply (as written by
     /// --export-ply) instead of building and simulating the scene; the scene gives the
     /// camera path and output settings. For splitting frame ranges over machines.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply", "export_spz", "export_particles"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["ply", "export_ply", "export_spz", "export_glb", "export_particles"])]
     pub(crate) from_states: Option<PathBuf>,
     /// After rendering, assemble the frames into a video with ffmpeg (which must be on
     /// the PATH; checked before rendering starts).
@@ -322,6 +340,7 @@ impl RenderArgs {
             quality: self.quality,
             export_ply: self.export_ply,
             export_spz: self.export_spz,
+            export_glb: self.export_glb,
             export_particles: self.export_particles,
             resume: self.resume,
             deterministic: self.deterministic,

@@ -50,6 +50,11 @@ fn run(cli: Cli) -> Result<()> {
             preview.as_deref(),
         ),
         Some(Command::Fragments { files, link }) => fragments(&files, link),
+        Some(Command::Convert {
+            input,
+            output,
+            spz_version,
+        }) => convert(&input, &output, spz_version),
         Some(Command::Info) => {
             print!("{}", splatter::gpu::info_report(cli.backend));
             Ok(())
@@ -212,6 +217,19 @@ fn inspect(
         splatter::run::preview::write(&gpu, &cloud, &found.inspection, png)?;
         println!("preview:       {}", png.display());
     }
+    Ok(())
+}
+
+/// `splatter convert`: one line naming what was read and written.
+fn convert(input: &Path, output: &Path, spz_version: u32) -> Result<()> {
+    use splatter::splat::spz::SpzVersion;
+    let spz = if spz_version == 4 {
+        SpzVersion::V4
+    } else {
+        SpzVersion::V3
+    };
+    let done = splatter::splat::convert::convert(input, output, spz)?;
+    println!("{} → {}: {done}", input.display(), output.display());
     Ok(())
 }
 

@@ -632,6 +632,44 @@ fn quick_look_stands_the_plant_leaves_up_from_its_cameras() {
     assert!(given.scene().up_warnings.is_empty());
 }
 
+/// A GLB stands on glTF's +y without cameras and without a guess: the plant written as a
+/// GLB (its −y up turned into glTF's +y, as splat-transform turns a PLY) stands leaves up
+/// in the quick look, and the note says the up came from the glTF frame.
+#[test]
+fn quick_look_stands_a_glb_on_gltf_s_up() {
+    use splatter::splat::formats::{write_splats, SourceFrame, WriteFormat};
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("plant.glb");
+    write_splats(&file, &plant(false), WriteFormat::Glb(SourceFrame::Capture)).unwrap();
+    let run = Run::prepare(RunOptions {
+        input: Input::Ply {
+            file,
+            cameras: None,
+            camera: None,
+            up: None,
+        },
+        out: Some(dir.path().join("out")),
+        width: Some(320),
+        height: Some(180),
+        ..RunOptions::default()
+    })
+    .unwrap();
+    let (leaves, pot) = leaves_and_pot(&run);
+    println!("plant.glb: leaves at z {leaves:.3}, pot at {pot:.3}");
+    assert!(
+        leaves > pot + 0.1,
+        "upside down: leaves {leaves}, pot {pot}"
+    );
+    let scene = run.scene();
+    assert!(scene.up_warnings.is_empty(), "{:?}", scene.up_warnings);
+    assert_eq!(scene.up_notes.len(), 1, "{:?}", scene.up_notes);
+    assert!(
+        scene.up_notes[0].contains("glTF frame"),
+        "{}",
+        scene.up_notes[0]
+    );
+}
+
 /// A scene names the capture's cameras (`{"auto": {"cameras": FILE}}`, any file name): the
 /// flipped plant is turned by its +y, and the note names the file.
 #[test]

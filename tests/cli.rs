@@ -1106,11 +1106,12 @@ fn bad_simulation_input_is_named() {
     assert_mentions(&line, &["objects[0].physics.material.E", "-5"]);
 }
 
-/// `--export-ply DIR` and `--export-spz DIR` write one standard 3DGS PLY and one SPZ per
-/// rendered frame, readable back, with the simulated object moved between frames, the
-/// same Gaussians in both (within SPZ's quantisation) and the region labels in both.
+/// `--export-ply DIR`, `--export-spz DIR` and `--export-glb DIR` write one standard 3DGS
+/// PLY, one SPZ and one GLB per rendered frame, readable back, with the simulated object
+/// moved between frames, the same Gaussians in all three (within SPZ's quantisation; the
+/// GLB turned from the z-up world into glTF's y-up frame) and the region labels in all.
 #[test]
-fn export_ply_and_spz_write_a_cloud_per_frame() {
+fn export_ply_spz_and_glb_write_a_cloud_per_frame() {
     let dir = workdir();
     write(dir.path(), "sim.json", &sim_scene(2, "", 200.0));
     let out = splatter(
@@ -1124,6 +1125,8 @@ fn export_ply_and_spz_write_a_cloud_per_frame() {
             "plys",
             "--export-spz",
             "spzs",
+            "--export-glb",
+            "glbs",
         ],
     );
     expect_success(&out);
@@ -1175,6 +1178,37 @@ fn export_ply_and_spz_write_a_cloud_per_frame() {
         s.label_names
     );
     assert!(size("spzs", "frame_00001.spz") * 5 < size("plys", "frame_00001.ply"));
+
+    assert_eq!(
+        list(&dir.path().join("glbs")),
+        ["frame_00000.glb", "frame_00001.glb"]
+    );
+    // Read back, a GLB is held in a PLY's frame (glTF's +y up is -y): the world's z up
+    // went to glTF's +y, so the world's (x, y, z) reads back as (-x, -z, -y).
+    let g = read("glbs", "frame_00001.glb");
+    assert_eq!(g.len(), b.len());
+    for (p, q) in g.positions.iter().zip(&b.positions) {
+        assert_eq!(*p, Vec3::new(-q.x, -q.z, -q.y));
+    }
+    let turn = Quat::from_mat3(&glam::Mat3::from_cols(-Vec3::X, -Vec3::Z, -Vec3::Y));
+    for (r, q) in g.rotations.iter().zip(&b.rotations) {
+        assert!(r.dot(turn * *q).abs() > 1.0 - 1e-5, "{r} vs {q}");
+    }
+    // The PLY keeps log-scales and logit opacities (a rounding from the linear values the
+    // GLB keeps as they are).
+    for (s, t) in g.scales.iter().zip(&b.scales) {
+        assert!((*s / *t - 1.0).abs().max_element() < 1e-6, "{s} vs {t}");
+    }
+    for (o, p) in g.opacities.iter().zip(&b.opacities) {
+        assert!((o - p).abs() < 1e-6, "{o} vs {p}");
+    }
+    assert_eq!(g.labels, b.labels);
+    assert_eq!(g.label_names, b.label_names);
+    let up = splatter::splat::formats::read_splats(&dir.path().join("glbs/frame_00001.glb"))
+        .unwrap()
+        .1
+        .up;
+    assert_eq!(up.map(|u| u.axis), Some("-y"), "glTF's up, declared");
 }
 
 /// Damaged and unsupported splat files (the messages docs/formats.md quotes): one `error:`
@@ -1246,6 +1280,274 @@ fn damaged_splat_files_get_one_error_line_each() {
                 "16 chunks for 4148 vertices",
             ][..],
         ),
+    ] {
+        let line = expect_error(&splatter(dir.path(), &["inspect", file]));
+        println!("{line}");
+        assert_mentions(&line, needles);
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// convert, and glTF / GLB input
+// ---------------------------------------------------------------------------------------------
+
+/// A cloud with everything a format may keep or lose: SH degree 3, unit quaternions in all
+/// directions, opacities over (0, 1), colours within SPZ's DC range and region labels.
+fn rich_cloud(n: usize) -> GaussianCloud {
+    let wave = |i: usize, k: usize| ((i * 7 + k * 13) as f32 * 0.37).sin();
+    let mut c = GaussianCloud {
+        sh_degree: 3,
+        label_names: vec!["flesh".into(), "rind".into(), "seeds".into()],
+        ..Default::default()
+    };
+    for i in 0..n {
+        c.positions
+            .push(Vec3::new(wave(i, 0), wave(i, 1), wave(i, 2)) * 0.4);
+        c.scales
+            .push(Vec3::new(0.01, 0.02, 0.03) * (1.5 + wave(i, 3)));
+        c.rotations
+            .push(Quat::from_xyzw(wave(i, 4), wave(i, 5), wave(i, 6), wave(i, 7)).normalize());
+        c.opacities.push(0.5 + 0.45 * wave(i, 8));
+        c.sh.extend((0..48).map(|k| if k < 3 { 2.0 } else { 0.4 } * wave(i, 9 + k)));
+        c.labels.push((i % 3) as u16);
+    }
+    c
+}
+
+/// Per-field largest errors of `b` against `a` (same order): position, relative scale,
+/// opacity, DC, rest SH, rotation (1 - |q·q'|).
+fn field_errors(a: &GaussianCloud, b: &GaussianCloud) -> [f32; 6] {
+    assert_eq!(a.len(), b.len(), "count");
+    let mut e = [0.0f32; 6];
+    for i in 0..a.len() {
+        let (sa, sb) = (a.sh_of(i), b.sh_of(i));
+        let got = [
+            (a.positions[i] - b.positions[i]).abs().max_element(),
+            (b.scales[i] / a.scales[i] - 1.0).abs().max_element(),
+            (a.opacities[i] - b.opacities[i]).abs(),
+            (0..3).map(|k| (sa[k] - sb[k]).abs()).fold(0.0, f32::max),
+            (3..48).map(|k| (sa[k] - sb[k]).abs()).fold(0.0, f32::max),
+            1.0 - a.rotations[i].dot(b.rotations[i]).abs(),
+        ];
+        for (w, g) in e.iter_mut().zip(got) {
+            *w = w.max(g);
+        }
+    }
+    e
+}
+
+/// `splatter convert` PLY → GLB → PLY and PLY → SPZ → PLY: one summary line each (counts
+/// and formats), the Gaussians back within each format's precision (GLB: float32 as the
+/// PLY, so to rounding; SPZ: its quantisation), the order and the labels kept.
+#[test]
+fn convert_round_trips_through_glb_and_spz() {
+    let dir = workdir();
+    let source = rich_cloud(500);
+    write_ply(
+        &dir.path().join("in.ply"),
+        &source,
+        PlyFormat::BinaryLittleEndian,
+    )
+    .unwrap();
+    let read = |name: &str| {
+        splatter::splat::formats::read_splats(&dir.path().join(name))
+            .unwrap()
+            .0
+    };
+    let reference = read("in.ply");
+    // position, relative scale, opacity, DC, rest SH, 1 - |q·q'|
+    for (via, limits, format) in [
+        ("glb", [0.0, 1e-6, 1e-6, 0.0, 0.0, 1e-6], "glTF GLB"),
+        (
+            "spz",
+            [2.5e-4, 0.033, 0.0021, 0.014, 0.07, 1e-4],
+            "SPZ version 3",
+        ),
+    ] {
+        let mid = format!("mid.{via}");
+        let back = format!("back_{via}.ply");
+        for (from, to) in [("in.ply", mid.as_str()), (mid.as_str(), back.as_str())] {
+            let out = splatter(dir.path(), &["convert", from, to]);
+            expect_success(&out);
+            let line = String::from_utf8_lossy(&out.stdout).trim().to_string();
+            println!("{line}");
+            assert_eq!(line.lines().count(), 1, "one summary line: {line}");
+            assert_mentions(&line, &[from, to, "500 Gaussians (SH degree 3)", format]);
+        }
+        let e = field_errors(&reference, &read(&back));
+        println!("PLY → {via} → PLY: {e:?}");
+        for ((name, got), limit) in ["position", "scale", "opacity", "DC", "SH", "rotation"]
+            .iter()
+            .zip(e)
+            .zip(limits)
+        {
+            assert!(got <= limit, "via {via}: {name} error {got} above {limit}");
+        }
+        let back = read(&back);
+        assert_eq!(back.labels, reference.labels, "via {via}: labels");
+        assert_eq!(back.label_names, reference.label_names, "via {via}: names");
+    }
+}
+
+/// An output extension we do not write, and an input that is not there: one error line,
+/// nothing written.
+#[test]
+fn convert_refuses_what_it_cannot_write() {
+    let dir = workdir();
+    write_tiny_ply(dir.path(), "in.ply", 10);
+    for (out, needles) in [
+        (
+            "out.sog",
+            &["out.sog", "SOG is read, not written", ".glb"][..],
+        ),
+        ("out.gltf", &["out.gltf", ".glb only"][..]),
+        (
+            "out.compressed.ply",
+            &["out.compressed.ply", "compressed PLY"][..],
+        ),
+        (
+            "out.obj",
+            &["out.obj", ".obj", ".ply", ".spz", ".splat", ".glb"][..],
+        ),
+    ] {
+        let line = expect_error(&splatter(dir.path(), &["convert", "in.ply", out]));
+        assert_mentions(&line, needles);
+        assert!(!dir.path().join(out).exists(), "{out} written");
+    }
+    let line = expect_error(&splatter(dir.path(), &["convert", "none.ply", "out.glb"]));
+    assert_mentions(&line, &["none.ply"]);
+    assert!(!dir.path().join("out.glb").exists());
+}
+
+/// The GLB fixture (splat-transform's) with its JSON edited by `edit`.
+fn edited_glb(edit: impl FnOnce(&mut serde_json::Value)) -> Vec<u8> {
+    let fixture =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/formats/donut_300_sh3.glb");
+    let glb = std::fs::read(fixture).unwrap();
+    let len = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
+    let json_len = len(12);
+    let mut json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    edit(&mut json);
+    let mut text = serde_json::to_vec(&json).unwrap();
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let bin = &glb[20 + json_len..];
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((20 + text.len() + bin.len()) as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend(bin);
+    out
+}
+
+/// The accessor index of attribute `name` in the fixture's primitive.
+fn attribute(json: &serde_json::Value, name: &str) -> usize {
+    json["meshes"][0]["primitives"][0]["attributes"][name]
+        .as_u64()
+        .unwrap() as usize
+}
+
+/// Bad glTF files: one `error:` line each, naming the file, the format and what is wrong
+/// (the field, its value and what was expected), from `inspect` as from every reader.
+#[test]
+fn damaged_glb_files_get_one_error_line_each() {
+    let dir = workdir();
+    let put = |name: &str, bytes: &[u8]| std::fs::write(dir.path().join(name), bytes).unwrap();
+    let good = edited_glb(|_| {});
+    put("truncated.glb", &good[..good.len() / 2]);
+    put(
+        "mesh.glb",
+        &edited_glb(|j| {
+            let p = &mut j["meshes"][0]["primitives"][0];
+            p.as_object_mut().unwrap().remove("extensions");
+            p["mode"] = 4.into();
+            j["extensionsUsed"] = serde_json::json!([]);
+        }),
+    );
+    put(
+        "vec4_scale.glb",
+        &edited_glb(|j| {
+            let a = attribute(j, "KHR_gaussian_splatting:SCALE");
+            j["accessors"][a]["type"] = "VEC4".into();
+        }),
+    );
+    put(
+        "byte_rotation.glb",
+        &edited_glb(|j| {
+            let a = attribute(j, "KHR_gaussian_splatting:ROTATION");
+            j["accessors"][a]["componentType"] = 5121.into();
+            j["accessors"][a]["normalized"] = true.into();
+        }),
+    );
+    put(
+        "count.glb",
+        &edited_glb(|j| {
+            let a = attribute(j, "KHR_gaussian_splatting:OPACITY");
+            j["accessors"][a]["count"] = 299.into();
+        }),
+    );
+    put(
+        "partial_sh.glb",
+        &edited_glb(|j| {
+            let attrs = j["meshes"][0]["primitives"][0]["attributes"]
+                .as_object_mut()
+                .unwrap();
+            attrs.remove("KHR_gaussian_splatting:SH_DEGREE_2_COEF_3");
+        }),
+    );
+    put(
+        "gltf.gltf",
+        br#"{"asset": {"version": "2.0"}, "buffers": [{"uri": "missing.bin", "byteLength": 4}]}"#,
+    );
+    for (file, needles) in [
+        (
+            "truncated.glb",
+            &["truncated.glb", "damaged glTF", "truncated", "76532 bytes"][..],
+        ),
+        (
+            "mesh.glb",
+            &[
+                "mesh.glb",
+                "glTF",
+                "without KHR_gaussian_splatting",
+                "extensionsUsed: none",
+            ][..],
+        ),
+        (
+            "vec4_scale.glb",
+            &[
+                "vec4_scale.glb",
+                "KHR_gaussian_splatting:SCALE",
+                "type VEC4, expected VEC3",
+            ][..],
+        ),
+        (
+            "byte_rotation.glb",
+            &[
+                "byte_rotation.glb",
+                "KHR_gaussian_splatting:ROTATION",
+                "componentType 5121 (unsigned byte normalized)",
+                "expected float, signed byte normalized, signed short normalized",
+            ][..],
+        ),
+        (
+            "count.glb",
+            &[
+                "count.glb",
+                "KHR_gaussian_splatting:OPACITY",
+                "299 elements, POSITION has 300",
+            ][..],
+        ),
+        (
+            "partial_sh.glb",
+            &[
+                "partial_sh.glb",
+                "SH degree 2 is partly defined",
+                "4 of its 5",
+            ][..],
+        ),
+        ("gltf.gltf", &["gltf.gltf", "buffer 0", "missing.bin"][..]),
     ] {
         let line = expect_error(&splatter(dir.path(), &["inspect", file]));
         println!("{line}");

@@ -326,7 +326,9 @@ fn ply_reader_survives_random_truncated_and_oversized_files() {
 /// a panic, and no allocation far beyond what the declared counts could hold.
 #[test]
 fn splat_format_readers_survive_truncated_and_flipped_files() {
-    use splatter::splat::formats::{read_splats_bytes, write_splats_bytes, WriteFormat};
+    use splatter::splat::formats::{
+        read_splats_bytes, write_splats_bytes, SourceFrame, WriteFormat,
+    };
     use splatter::splat::spz::SpzVersion;
     let _serial = SERIAL.lock().unwrap_or_else(|p| p.into_inner());
     let seed = 0x5eed_0005;
@@ -339,6 +341,7 @@ fn splat_format_readers_survive_truncated_and_flipped_files() {
         "donut_4k.splat",
         "donut_4k.compressed.ply",
         "donut_4k.sog",
+        "donut_300_sh3.glb",
     ]
     .iter()
     .map(|n| (n.to_string(), std::fs::read(dir.join(n)).unwrap()))
@@ -347,6 +350,7 @@ fn splat_format_readers_survive_truncated_and_flipped_files() {
         ("ours.v3.spz", WriteFormat::Spz(SpzVersion::V3)),
         ("ours.v4.spz", WriteFormat::Spz(SpzVersion::V4)),
         ("ours.splat", WriteFormat::Splat),
+        ("ours.glb", WriteFormat::Glb(SourceFrame::Capture)),
     ] {
         files.push((
             name.to_string(),

@@ -1,7 +1,9 @@
-//! `--export-ply` and `--export-spz`: the Gaussians of a frame, as the renderer draws them,
-//! written as a standard 3DGS PLY or as SPZ so that any splat viewer can play a simulation,
-//! region labels included (PLY: an integer property and header comments; SPZ: an extension
-//! record, docs/formats.md). Each covariance is
+//! `--export-ply`, `--export-spz` and `--export-glb`: the Gaussians of a frame, as the
+//! renderer draws them, written as a standard 3DGS PLY, as SPZ or as glTF GLB
+//! (KHR_gaussian_splatting) so that any splat viewer can play a simulation, region labels
+//! included (PLY: an integer property and header comments; SPZ: an extension record; GLB:
+//! an application attribute, docs/formats.md). The GLB is turned from the z-up world into
+//! glTF's y-up frame, so that glTF viewers show the scene upright. Each covariance is
 //! folded back into scale and rotation (its eigen-decomposition), and SH coefficients are
 //! rotated from the Gaussian's rest frame into the world frame (viewers have no
 //! per-Gaussian frame).
@@ -15,7 +17,7 @@ use crate::render::gpu::layout::GaussianIn;
 use crate::render::splats::mat3_from_sym3;
 use crate::render::Splats;
 use crate::sim::svd::symmetric_eigen;
-use crate::splat::formats::{write_splats, SplatError, WriteFormat};
+use crate::splat::formats::{write_splats, SourceFrame, SplatError, WriteFormat};
 use crate::splat::sh::ShRotator;
 use crate::splat::spz::SpzVersion;
 use crate::splat::{GaussianCloud, NO_LABEL};
@@ -25,6 +27,7 @@ use crate::splat::{GaussianCloud, NO_LABEL};
 pub enum Export {
     Ply,
     Spz,
+    Glb,
 }
 
 impl Export {
@@ -32,6 +35,7 @@ impl Export {
         match self {
             Export::Ply => "ply",
             Export::Spz => "spz",
+            Export::Glb => "glb",
         }
     }
 
@@ -40,6 +44,7 @@ impl Export {
         match self {
             Export::Ply => "PLY export directory",
             Export::Spz => "SPZ export directory",
+            Export::Glb => "GLB export directory",
         }
     }
 }
@@ -138,6 +143,7 @@ pub fn export_frame(
     let write = match format {
         Export::Ply => WriteFormat::Ply,
         Export::Spz => WriteFormat::Spz(SpzVersion::V3),
+        Export::Glb => WriteFormat::Glb(SourceFrame::ZUp),
     };
     write_splats(&path, cloud, write)?;
     Ok(path)

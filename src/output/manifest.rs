@@ -85,6 +85,8 @@ pub struct Settings {
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export_spz: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub export_glb: Option<PathBuf>,
+    #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export_particles: Option<PathBuf>,
 }
 

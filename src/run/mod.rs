@@ -77,6 +77,8 @@ pub struct RunOptions {
     pub export_ply: Option<PathBuf>,
     /// Also write each frame's Gaussians as SPZ (version 3) into this directory.
     pub export_spz: Option<PathBuf>,
+    /// Also write each frame's Gaussians as GLB (KHR_gaussian_splatting) into this directory.
+    pub export_glb: Option<PathBuf>,
     /// Also write each frame's MPM particles as a PLY point cloud into this directory.
     pub export_particles: Option<PathBuf>,
     /// Skip frames already written and restart the simulation from the checkpoint.
@@ -98,6 +100,7 @@ impl RunOptions {
         [
             (self.export_ply.as_deref(), Export::Ply),
             (self.export_spz.as_deref(), Export::Spz),
+            (self.export_glb.as_deref(), Export::Glb),
         ]
         .into_iter()
         .filter_map(|(d, f)| d.map(|d| (d, f)))
@@ -117,6 +120,7 @@ impl Default for RunOptions {
             quality: Quality::Standard,
             export_ply: None,
             export_spz: None,
+            export_glb: None,
             export_particles: None,
             resume: false,
             deterministic: false,
@@ -380,8 +384,8 @@ impl Job {
         }
     }
 
-    /// A frame counts as done for `--resume` when its PNG (and, with --export-ply, its
-    /// PLY) exists: both are written to a temporary name and renamed, so existing means
+    /// A frame counts as done for `--resume` when its PNG (and each export's file: PLY,
+    /// SPZ, GLB, particles) exists: both are written to a temporary name and renamed, so existing means
     /// complete.
     fn frame_done(&self, dir: &Path, frame: u32) -> bool {
         frame_path(dir, frame).is_file()

@@ -29,9 +29,10 @@ pub fn inspect_file(
 ) -> Result<(GaussianCloud, CaptureUp, String)> {
     let (cloud, read) = crate::splat::formats::read_splats(file)?;
     // Only a named cameras file can fail.
-    let found = crate::scene::inspect_capture(&cloud, file, cameras).with_context(|| {
-        cameras.map_or_else(String::new, |c| format!("--cameras {}", c.display()))
-    })?;
+    let found =
+        crate::scene::inspect_capture(&cloud, file, cameras, read.up).with_context(|| {
+            cameras.map_or_else(String::new, |c| format!("--cameras {}", c.display()))
+        })?;
     let mut report = format!(
         "file:          {} ({} {})\n",
         file.display(),

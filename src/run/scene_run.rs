@@ -166,6 +166,7 @@ pub(super) fn execute(
         from_states: None,
         export_ply: opts.export_ply.clone(),
         export_spz: opts.export_spz.clone(),
+        export_glb: opts.export_glb.clone(),
         export_particles: opts.export_particles.clone(),
         ..job.frame_settings()
     };

@@ -8,7 +8,8 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 
 use super::{one_line, Scene, SceneError};
-use crate::splat::inspect::{cameras_up, inspect_with_cameras, Inspection};
+use crate::splat::formats::DeclaredUp;
+use crate::splat::inspect::{cameras_up, inspect_declared, Inspection};
 use crate::splat::GaussianCloud;
 
 /// A capture's inspection, and where its cameras came from.
@@ -41,11 +42,13 @@ pub fn cameras_next_to(capture: &Path) -> Option<PathBuf> {
 
 /// Inspect the capture `cloud` read from `capture`, with the cameras of `named` (an error
 /// when it cannot be read) or else of a `cameras.json` next to the capture (ignored, with a
-/// reason, when it cannot be read: it may be another tool's file of that name).
+/// reason, when it cannot be read: it may be another tool's file of that name), and the up
+/// its format defines (`declared`, which decides when there is one).
 pub fn inspect_capture(
     cloud: &GaussianCloud,
     capture: &Path,
     named: Option<&Path>,
+    declared: Option<DeclaredUp>,
 ) -> Result<CaptureUp, SceneError> {
     let (file, found) = match named {
         Some(f) => (Some(f.to_path_buf()), false),
@@ -62,7 +65,7 @@ pub fn inspect_capture(
     };
     let rotations: Vec<glam::Mat3> = cameras.iter().flatten().map(|c| c.rotation).collect();
     Ok(CaptureUp {
-        inspection: inspect_with_cameras(cloud, cameras_up(&rotations)),
+        inspection: inspect_declared(cloud, cameras_up(&rotations), declared),
         cameras: file.filter(|_| cameras.is_some()).map(|f| (f, found)),
         ignored,
     })
@@ -102,6 +105,7 @@ impl CaptureUp {
         ignored
             .into_iter()
             .chain(self.inspection.guess_warning(name))
+            .chain(self.inspection.declared_warning(name))
             .collect()
     }
 }
@@ -128,9 +132,9 @@ impl Scene {
             };
             let capture = self.base_dir.join(file);
             let named = spec.auto_cameras().map(|c| self.base_dir.join(c));
-            let (cloud, _) =
+            let (cloud, read) =
                 crate::splat::formats::read_splats(&capture).map_err(|e| fail(e.to_string()))?;
-            let found = inspect_capture(&cloud, &capture, named.as_deref())
+            let found = inspect_capture(&cloud, &capture, named.as_deref(), read.up)
                 .map_err(|e| fail(format!("transform.up.auto.cameras: {e}")))?;
             self.up_notes.extend(found.note(&name));
             self.up_warnings.extend(found.warnings(&name));

@@ -22,6 +22,8 @@ pub enum Format {
     Spz,
     /// PlayCanvas SOG (`meta.json` + WebP images, or a `.sog` zip).
     Sog,
+    /// glTF 2.0 (`.glb`, or `.gltf` JSON) with `KHR_gaussian_splatting`.
+    Gltf,
 }
 
 impl fmt::Display for Format {
@@ -32,6 +34,7 @@ impl fmt::Display for Format {
             Format::Splat => ".splat",
             Format::Spz => "SPZ",
             Format::Sog => "SOG",
+            Format::Gltf => "glTF",
         })
     }
 }
@@ -62,8 +65,18 @@ pub enum SplatError {
         what: String,
         expected: &'static str,
     },
-    #[error("{file}: not a splat file this program reads: {what} (expected a 3DGS PLY, a compressed.ply, an SPZ, a SOG folder or .sog, or a .splat)")]
+    #[error("{file}: not a splat file this program reads: {what} (expected a 3DGS PLY, a compressed.ply, an SPZ, a SOG folder or .sog, a .splat, or a glTF/GLB with KHR_gaussian_splatting)")]
     Unknown { file: String, what: String },
+}
+
+/// An up axis that a format defines rather than leaves to a guess (glTF is +y up), named
+/// in the frame the reader hands the cloud over in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeclaredUp {
+    /// A signed axis: `"-y"`.
+    pub axis: &'static str,
+    /// Where it comes from, in words.
+    pub source: &'static str,
 }
 
 /// The degree-0 real spherical harmonic, Y₀₀ = 1/(2√π): display colour = 0.5 + C0 · DC.
@@ -128,6 +141,16 @@ impl Builder {
     }
 
     pub fn push(&mut self, g: Decoded<'_>) {
+        self.push_scaled(g, |log| log.map(f32::exp));
+    }
+
+    /// [`Builder::push`] for a format that stores scales linear (glTF): `g.log_scale` holds
+    /// them as stored, and they are kept bit for bit (no exp/ln round trip).
+    pub fn push_linear(&mut self, g: Decoded<'_>) {
+        self.push_scaled(g, |linear| linear);
+    }
+
+    fn push_scaled(&mut self, g: Decoded<'_>, to_linear: impl Fn([f32; 3]) -> [f32; 3]) {
         let finite = g.position.iter().all(|v| v.is_finite())
             && g.log_scale.iter().all(|v| v.is_finite())
             && g.rotation.iter().all(|v| v.is_finite())
@@ -137,7 +160,7 @@ impl Builder {
             self.skipped_nonfinite += 1;
             return;
         }
-        let scale = Vec3::from_array(g.log_scale.map(f32::exp));
+        let scale = Vec3::from_array(to_linear(g.log_scale));
         let Some(rotation) = unit_wxyz(g.rotation) else {
             self.skipped_degenerate += 1;
             return;

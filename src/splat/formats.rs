@@ -1,15 +1,16 @@
 //! One entry point for every splat format users exchange (docs/formats.md): the format is
-//! told by the content (magic bytes, the PLY header), with the extension only for the one
-//! format that has no signature (antimatter15 `.splat`).
+//! told by the content (magic bytes, the PLY header, a glTF's JSON), with the extension
+//! only for the one format that has no signature (antimatter15 `.splat`).
 
 use std::path::Path;
 
 use super::codec::Builder;
 use super::ply::PlyFormat;
 use super::spz::SpzVersion;
-use super::{antimatter, compressed_ply, ply, sog, spz, GaussianCloud};
+use super::{antimatter, compressed_ply, gltf, ply, sog, spz, GaussianCloud};
 
-pub use super::codec::{Format, SplatError};
+pub use super::codec::{DeclaredUp, Format, SplatError};
+pub use super::gltf::SourceFrame;
 
 /// What [`read_splats`] found besides the Gaussians.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -24,6 +25,8 @@ pub struct ReadReport {
     pub skipped_nonfinite: usize,
     /// Gaussians skipped for a scale ≤ 0 or a zero quaternion.
     pub skipped_degenerate: usize,
+    /// The up axis the format defines (glTF's), where it defines one.
+    pub up: Option<DeclaredUp>,
 }
 
 /// Tell the format of a file from its first bytes (and, for `.splat`, its name).
@@ -50,11 +53,22 @@ pub fn detect(path: &Path, head: &[u8]) -> Option<Format> {
     if head.first() == Some(&b'{') && path.file_name().is_some_and(|n| n == "meta.json") {
         return Some(Format::Sog);
     }
+    if head.starts_with(gltf::GLB_MAGIC) || looks_like_gltf_json(head) {
+        return Some(Format::Gltf);
+    }
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .unwrap_or_default();
     ext.eq_ignore_ascii_case("splat").then_some(Format::Splat)
+}
+
+/// A JSON object whose first kilobytes name glTF's `asset` (every glTF has one; a SOG's
+/// `meta.json` has none).
+fn looks_like_gltf_json(head: &[u8]) -> bool {
+    let text = String::from_utf8_lossy(&head[..head.len().min(1 << 16)]);
+    let text = text.trim_start_matches('\u{feff}').trim_start();
+    text.starts_with('{') && text.contains("\"asset\"")
 }
 
 /// Read a splat file of any supported format (a SOG folder may be given as the folder).
@@ -110,6 +124,7 @@ pub fn read_splats_bytes(
                     in_file: r.vertices_in_file,
                     skipped_nonfinite: r.skipped_nonfinite,
                     skipped_degenerate: r.skipped_degenerate,
+                    up: None,
                 },
             ))
         }
@@ -122,6 +137,12 @@ pub fn read_splats_bytes(
         Format::Spz => {
             let (b, version) = spz::read(bytes, &file)?;
             finish(b, format, format!("version {version}"))
+        }
+        Format::Gltf => {
+            let (b, variant) = gltf::read(bytes, path, &file)?;
+            let (cloud, mut report) = finish(b, format, variant)?;
+            report.up = Some(gltf::DECLARED_UP);
+            Ok((cloud, report))
         }
         Format::Sog => {
             if bytes.starts_with(b"PK") {
@@ -159,6 +180,7 @@ fn finish(
             in_file,
             skipped_nonfinite: b.skipped_nonfinite,
             skipped_degenerate: b.skipped_degenerate,
+            up: None,
         },
     ))
 }
@@ -183,9 +205,11 @@ pub enum WriteFormat {
     Ply,
     Spz(SpzVersion),
     Splat,
+    /// GLB with KHR_gaussian_splatting, from a cloud whose axes lie as the frame says.
+    Glb(SourceFrame),
 }
 
-/// Encode `cloud` in `format`; labels travel in PLY and SPZ (not in `.splat`).
+/// Encode `cloud` in `format`; labels travel in PLY, SPZ and GLB (not in `.splat`).
 pub fn write_splats_bytes(
     cloud: &GaussianCloud,
     format: WriteFormat,
@@ -199,6 +223,7 @@ pub fn write_splats_bytes(
         )?),
         WriteFormat::Spz(v) => Ok(spz::write(cloud, v)),
         WriteFormat::Splat => Ok(antimatter::write(cloud)),
+        WriteFormat::Glb(frame) => gltf::write(cloud, frame, name),
     }
 }
 

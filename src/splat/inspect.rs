@@ -21,12 +21,17 @@
 //!    point y down the image, so the first camera's −y is the world's up). This is a guess,
 //!    wrong for every capture written y-up, and [`Inspection::guess_warning`] says so.
 //!
+//! A format that defines its up axis (glTF: +y) decides it instead of all of these; when
+//! the capture's own evidence points elsewhere (a file converted without turning it into
+//! glTF's frame), the report and a warning say so.
+//!
 //! Each can be wrong for a given capture (cameras held sideways, an object photographed
 //! from below, a capture whose densest layer is its base); the report prints the evidence
 //! and the preview shows the result, and a scene can name the axis instead (`"up": "+z"`).
 
 use glam::{Mat3, Vec3};
 
+use super::codec::DeclaredUp;
 use super::GaussianCloud;
 use crate::rng::SplitMix64;
 
@@ -65,6 +70,12 @@ pub enum UpEvidence {
     SeenTop { score: f32, runner_up: f32 },
     /// None decided; the camera convention's −y, a guess.
     Convention,
+    /// The file's format defines it (`source` says how). `against` is the up the capture's
+    /// own evidence points to when that differs, and which evidence it is.
+    Declared {
+        source: &'static str,
+        against: Option<(Vec3, &'static str)>,
+    },
 }
 
 /// What a capture's cameras say about up.
@@ -174,6 +185,15 @@ pub fn inspect(cloud: &GaussianCloud) -> Inspection {
 
 /// Inspect a capture whose cameras said `cameras` about its up (see [`cameras_up`]).
 pub fn inspect_with_cameras(cloud: &GaussianCloud, cameras: Option<CamerasUp>) -> Inspection {
+    inspect_declared(cloud, cameras, None)
+}
+
+/// Inspect a capture whose format may define its up (`declared`, from the reader).
+pub fn inspect_declared(
+    cloud: &GaussianCloud,
+    cameras: Option<CamerasUp>,
+    declared: Option<DeclaredUp>,
+) -> Inspection {
     let n = cloud.len();
     let bounds = cloud.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
     let robust = robust_bounds(&cloud.positions);
@@ -194,6 +214,10 @@ pub fn inspect_with_cameras(cloud: &GaussianCloud, cameras: Option<CamerasUp>) -
     let axis_scores = AXES.map(|a| seen_top_score(&core, axis_vector(a).unwrap_or(Vec3::Z)));
     let plane = support_plane(&core, size.length());
     let (up, evidence) = estimate_up(cameras, plane, &axis_scores);
+    let (up, evidence) = match declared.and_then(|d| Some((axis_vector(d.axis)?, d.source))) {
+        Some((axis, source)) => (axis, declared_evidence(axis, source, up, &evidence)),
+        None => (up, evidence),
+    };
     let mut heights: Vec<f32> = core.iter().map(|p| p.dot(up)).collect();
     heights.sort_by(f32::total_cmp);
     let support = match (&evidence, heights.is_empty()) {
@@ -264,6 +288,24 @@ impl Inspection {
         })
     }
 
+    /// One line when the format's up and the capture's evidence disagree.
+    pub fn declared_warning(&self, name: &str) -> Option<String> {
+        let UpEvidence::Declared {
+            against: Some((other, kind)),
+            ..
+        } = self.evidence
+        else {
+            return None;
+        };
+        let other = axis_name(other).map_or_else(|| format!("{other:?}"), str::to_string);
+        Some(format!(
+            "{name}: up {} is the file format's, but {kind} points to {other}: if it lies on its side, \
+             its writer did not turn it into the format's frame; say which way is up with \
+             `render --ply FILE --up {other}` or `\"up\": \"{other}\"` in a scene",
+            self.up_name()
+        ))
+    }
+
     /// The up found and how: `"-y", from the mean up of 24 cameras, …`.
     pub fn up_text(&self) -> String {
         format!("{}, from {}", self.up_name(), self.evidence_text())
@@ -304,6 +346,13 @@ impl Inspection {
             UpEvidence::Convention => {
                 format!("the camera convention's -y, a guess ({})", self.undecided())
             }
+            UpEvidence::Declared { source, against } => match against {
+                None => source.to_string(),
+                Some((v, kind)) => format!(
+                    "{source}; {kind} points to {}",
+                    axis_name(*v).map_or_else(|| format!("{v:?}"), |a| format!("\"{a}\""))
+                ),
+            },
         }
     }
 }
@@ -396,6 +445,27 @@ fn estimate_up(
         );
     }
     (-Vec3::Y, UpEvidence::Convention)
+}
+
+/// The format's up, with the evidence's up when that is decisive and points elsewhere.
+fn declared_evidence(
+    axis: Vec3,
+    source: &'static str,
+    estimate: Vec3,
+    evidence: &UpEvidence,
+) -> UpEvidence {
+    let kind = match evidence {
+        UpEvidence::Cameras { .. } => Some("the capture's cameras"),
+        UpEvidence::SupportPlane { .. } => Some("a support plane"),
+        UpEvidence::SeenTop { .. } => Some("a seen top"),
+        _ => None,
+    };
+    UpEvidence::Declared {
+        source,
+        against: kind
+            .filter(|_| estimate.distance(axis) > 1e-3)
+            .map(|k| (estimate, k)),
+    }
 }
 
 /// An axis when `v` is within 10° of one, else `v`.
