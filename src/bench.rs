@@ -610,8 +610,8 @@ impl SimCase {
         };
         use glam::DVec3;
         let material = match model {
-            SimModel::Nacc => Material::Nacc {
-                params: NaccParams {
+            SimModel::Nacc => Material::nacc(
+                NaccParams {
                     e: Self::E,
                     nu: Self::NU,
                     alpha0: -0.04,
@@ -619,8 +619,8 @@ impl SimCase {
                     xi: 2.0,
                     m_slope: 2.36,
                 },
-                variant: Case3Variant::Continuous { k: 2.0 },
-            },
+                Case3Variant::Continuous { k: 2.0 },
+            ),
             SimModel::FixedCorotated => Material::fixed_corotated(Self::E, Self::NU),
         };
         let dx = 1.0 / f64::from(cells);

@@ -9,6 +9,7 @@ use splatter::farm::{self, FarmError};
 use splatter::gpu::BackendChoice;
 use splatter::run::{Input, RunOptions};
 use splatter::scene;
+use splatter::sim::nacc::ReturnMapping;
 
 #[derive(Parser)]
 #[command(
@@ -158,8 +159,8 @@ pub(crate) enum BenchWhat {
         #[arg(long, value_delimiter = ',')]
         shatter_dx: Option<Vec<f64>>,
         /// Return mappings of the shatter study (comma-separated; default both).
-        #[arg(long, value_enum, value_delimiter = ',')]
-        shatter_mapping: Option<Vec<ShatterMapping>>,
+        #[arg(long, value_delimiter = ',', value_parser = return_mapping)]
+        shatter_mapping: Option<Vec<ReturnMapping>>,
         /// Simulate one quarter of the fruit between two symmetry planes through its
         /// centre: a quarter of the particles, so a CPU reaches finer spacings (no stills).
         #[arg(long)]
@@ -170,10 +171,12 @@ pub(crate) enum BenchWhat {
     },
 }
 
-#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
-pub(crate) enum ShatterMapping {
-    Continuous,
-    Center,
+/// A return mapping by its scene-file name (`sim::nacc::ReturnMapping`).
+fn return_mapping(name: &str) -> Result<ReturnMapping, String> {
+    ReturnMapping::from_name(name).ok_or_else(|| {
+        let names: Vec<_> = ReturnMapping::ALL.iter().map(|m| m.name()).collect();
+        format!("expected one of {}", names.join(", "))
+    })
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]

@@ -13,7 +13,8 @@ use splatter::scene;
 
 mod cli;
 
-use cli::{AccuracyPart, BenchWhat, Cli, Command, ShatterMapping, SuiteArgs};
+use cli::{AccuracyPart, BenchWhat, Cli, Command, SuiteArgs};
+use splatter::sim::nacc::ReturnMapping;
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(
@@ -142,15 +143,11 @@ fn run(cli: Cli) -> Result<()> {
                 bail!("--shatter-dx {bad}: expected positive grid spacings in metres");
             }
             // In the study's order, each once.
-            let shatter_mappings: Option<Vec<&'static str>> = shatter_mapping.map(|chosen| {
-                [
-                    (ShatterMapping::Continuous, "continuous"),
-                    (ShatterMapping::Center, "center"),
-                ]
-                .into_iter()
-                .filter(|(m, _)| chosen.contains(m))
-                .map(|(_, name)| name)
-                .collect()
+            let shatter_mappings: Option<Vec<ReturnMapping>> = shatter_mapping.map(|chosen| {
+                splatter::study::shatter::MAPPINGS
+                    .into_iter()
+                    .filter(|m| chosen.contains(m))
+                    .collect()
             });
             let part = match only {
                 AccuracyPart::All => Part::All,

@@ -567,8 +567,8 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
     }
     let materials = [
         Material::fixed_corotated(2e4, 0.3),
-        Material::Nacc {
-            params: NaccParams {
+        Material::nacc(
+            NaccParams {
                 e: 2e4,
                 nu: 0.3,
                 alpha0: -0.001,
@@ -576,8 +576,8 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
                 xi: 0.0,
                 m_slope: 1.0,
             },
-            variant: Case3Variant::Continuous { k: 2.0 },
-        },
+            Case3Variant::Continuous { k: 2.0 },
+        ),
     ];
     let grid = Grid::new(glam::DVec3::ZERO, glam::DVec3::splat(2.0), 1.0 / 32.0);
     let params = StepParams {

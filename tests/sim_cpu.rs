@@ -425,10 +425,7 @@ fn nacc_sphere_hits_sticky_ground() {
         xi: 2.0,
         m_slope: 2.36,
     };
-    let mat = Material::Nacc {
-        params: params_nacc,
-        variant: Case3Variant::Continuous { k: 2.0 },
-    };
+    let mat = Material::nacc(params_nacc, Case3Variant::Continuous { k: 2.0 });
     let mats = [mat];
     let mut g = Grid::new(DVec3::ZERO, DVec3::new(0.4, 0.4, 0.4), dx);
     let (center, radius) = (DVec3::new(0.2, 0.17, 0.2), 0.08);

@@ -322,10 +322,7 @@ fn gpu_step_with_a_surface_collider_matches_the_cpu_reference() {
 fn nacc_sphere() -> Scene {
     let dx = 0.02;
     let density = 2.0;
-    let material = Material::Nacc {
-        params: common::fruit(),
-        variant: Case3Variant::Continuous { k: 2.0 },
-    };
+    let material = Material::nacc(common::fruit(), Case3Variant::Continuous { k: 2.0 });
     let mut particles =
         Particles::sample_sphere(DVec3::new(0.2, 0.12, 0.2), 0.06, dx / 2.0, density);
     particles.set_material(0, &material);

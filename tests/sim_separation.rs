@@ -20,10 +20,7 @@ const NACC: NaccParams = NaccParams {
 };
 
 fn nacc() -> Material {
-    Material::Nacc {
-        params: NACC,
-        variant: Case3Variant::Continuous { k: 2.0 },
-    }
+    Material::nacc(NACC, Case3Variant::Continuous { k: 2.0 })
 }
 
 fn params(dt: f64, separation: Separation, transfer: Transfer) -> StepParams {

@@ -26,3 +26,19 @@ fn elastic_kirchhoff_neo_hookean(f: mat3x3<f32>, mu: f32, kappa: f32) -> mat3x3<
     let dev_b = b - (sim_trace3(b) / 3.0) * SIM_IDENTITY3;
     return (mu * pow(j, -2.0 / 3.0)) * dev_b + (0.5 * kappa * (j - 1.0) * (j + 1.0)) * SIM_IDENTITY3;
 }
+
+// Singular values below this are clamped before their logarithm (`elasticity::HENCKY_SIGMA_MIN`).
+const HENCKY_SIGMA_MIN: f32 = 1e-4;
+
+// The Hencky strains ε = ln σ of an SVD, σ clamped to ≥ HENCKY_SIGMA_MIN.
+fn hencky_strain(d: Svd3) -> vec3<f32> {
+    return log(max(d.sigma, vec3<f32>(HENCKY_SIGMA_MIN)));
+}
+
+// St. Venant–Kirchhoff on the Hencky strain: τ = U (2μ ε + λ tr(ε) I) Uᵀ, ε = ln σ.
+fn elastic_kirchhoff_stvk_hencky(f: mat3x3<f32>, mu: f32, lambda: f32) -> mat3x3<f32> {
+    let d = svd3(f);
+    let eps = hencky_strain(d);
+    let t = 2.0 * mu * eps + vec3<f32>(lambda * (eps.x + eps.y + eps.z));
+    return d.u * sim_diag3(t) * transpose(d.u);
+}

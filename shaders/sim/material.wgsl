@@ -1,7 +1,9 @@
-// A material as the step passes see it (`sim::gpu::GpuMaterial`): which registered
-// elastic and plastic model, and their parameters. The ELASTIC_*/PLASTIC_* codes and the
-// dispatch functions on them are generated from the Rust registry (sim::models::wgsl) and
-// follow this file.
+// A material as the step passes see it (`sim::step::GpuMaterial`): which registered
+// elastic and plastic model, the Lamé parameters, and the plastic model's own parameters
+// in the order its `PlasticLaw::gpu_params` packs them (its file under
+// shaders/sim/models/ unpacks them). The ELASTIC_*/PLASTIC_* codes and the dispatch
+// functions on them are generated from the Rust registry (sim::models::wgsl) and follow
+// this file.
 struct SimMaterial {
     // ELASTIC_*
     elastic: u32,
@@ -9,7 +11,7 @@ struct SimMaterial {
     plastic: u32,
     mu: f32,
     lambda: f32,
+    // bulk modulus κ = λ + 2μ/3
     kappa: f32,
-    nacc: NaccMaterial,
+    params: array<f32, 8>,
 }
-

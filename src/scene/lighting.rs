@@ -8,7 +8,6 @@ use glam::Vec3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::physics::MaterialSpec;
 use super::simulation::{PartKind, SplatPart};
 use super::{BuildReport, Scene, SceneError};
 use crate::derive::normals::{spacing_of, RecomputedObject};
@@ -398,10 +397,7 @@ pub fn prepare(
                 m
             }
         };
-        let fractures = obj
-            .physics
-            .as_ref()
-            .is_some_and(|p| matches!(p.material, MaterialSpec::Nacc(_)));
+        let fractures = obj.physics.as_ref().is_some_and(|p| p.material.fractures());
         let recomputed = match spec.simulated_normals {
             NormalMode::Recompute => true,
             NormalMode::Transport => false,

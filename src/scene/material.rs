@@ -1,103 +1,66 @@
-//! The scene file's `material` objects (docs/scene-format.md): a registered elastic model
-//! or NACC, parsed, validated and turned into [`crate::sim::Material`].
+//! The scene file's `material` objects (docs/scene-format.md): `model` names a registered
+//! elastic model (`fixed_corotated`, `neo_hookean`, `stvk_hencky`) or a registered plastic
+//! law (`nacc`, `drucker_prager`, `von_mises`, `snow`: `sim::models`), with `E`, `nu`,
+//! `density` and the law's own parameters. Parsing, the schema and the validation of a
+//! law's parameters all come from the registry.
 
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use serde_json::{Map, Value};
 
 use super::SceneError;
-use crate::sim::nacc::{m_from_friction_angle, Case3Variant, NaccParams};
-use crate::sim::{ElasticModel, Material};
+use crate::sim::models::ParseError;
+use crate::sim::{ElasticModel, Material, PlasticModel};
 
-/// A material (docs/method.md §3–§4, parameters as in the paper's table): `model` is a
-/// registered elastic model (`sim::models`: `fixed_corotated`, `neo_hookean`, …) or
-/// `nacc`.
-#[derive(Clone, Debug)]
-pub enum MaterialSpec {
-    /// Elastic, no plasticity.
-    Elastic(ElasticSpec),
-    /// CD-MPM: Non-Associated Cam-Clay on Neo-Hookean, with hardening.
-    Nacc(NaccSpec),
-}
-
-/// An elastic material of a registered model.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct ElasticSpec {
-    pub model: ElasticModelName,
-    #[serde(rename = "E")]
+/// A material (docs/method.md §3–§4): a registered model by name, its elastic constants
+/// and, for a plastic law, its parameters as written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MaterialSpec {
+    pub model: ModelName,
+    /// Young's modulus E in Pa.
     pub e: f64,
+    /// Poisson ratio ν.
     pub nu: f64,
+    /// Density in kg/m³.
     pub density: f64,
+    /// The plastic law's parameters (empty for an elastic model).
+    pub params: Map<String, Value>,
 }
 
-/// A NACC material.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct NaccSpec {
-    pub model: NaccTag,
-    #[serde(rename = "E")]
-    pub e: f64,
-    pub nu: f64,
-    pub density: f64,
-    pub alpha0: f64,
-    pub beta: f64,
-    pub xi: f64,
-    /// Slope M of the critical-state line (or give `friction_angle_deg`).
-    #[serde(rename = "M", default, skip_serializing_if = "Option::is_none")]
-    pub m_slope: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub friction_angle_deg: Option<f64>,
-    /// Case-3 return mapping: `center`, `continuous` (default) or `closest_point`.
-    #[serde(default = "default_mapping")]
-    pub return_mapping: ReturnMappingSpec,
-    /// Exponent k of the `continuous` mapping. Default 2.
-    #[serde(default = "default_k")]
-    pub k: f64,
-}
-
-/// `"model": "nacc"`.
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum NaccTag {
-    Nacc,
-}
-
-/// A registered elastic model, by its name in the scene file.
+/// A model the scene file can name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct ElasticModelName(pub ElasticModel);
-
-fn elastic_names() -> Vec<&'static str> {
-    ElasticModel::ALL.iter().map(|m| m.def().name).collect()
+pub enum ModelName {
+    Elastic(ElasticModel),
+    Plastic(PlasticModel),
 }
 
-impl Serialize for ElasticModelName {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(self.0.def().name)
+impl ModelName {
+    pub fn from_name(name: &str) -> Option<ModelName> {
+        ElasticModel::from_name(name)
+            .map(ModelName::Elastic)
+            .or_else(|| PlasticModel::from_name(name).map(ModelName::Plastic))
     }
-}
 
-impl<'de> Deserialize<'de> for ElasticModelName {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let name = String::deserialize(d)?;
-        ElasticModel::from_name(&name)
-            .map(ElasticModelName)
-            .ok_or_else(|| serde::de::Error::custom(unknown_model(&name)))
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelName::Elastic(m) => m.def().name,
+            ModelName::Plastic(m) => m.name(),
+        }
     }
-}
 
-impl JsonSchema for ElasticModelName {
-    fn schema_name() -> std::borrow::Cow<'static, str> {
-        "ElasticModelName".into()
-    }
-    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
-        schemars::json_schema!({ "type": "string", "enum": elastic_names() })
+    /// Every name a scene file can give, elastic models first.
+    pub fn all() -> Vec<&'static str> {
+        let elastic = ElasticModel::ALL.iter().map(|m| m.def().name);
+        elastic
+            .chain(PlasticModel::LAWS.iter().map(|m| m.name()))
+            .collect()
     }
 }
 
 fn unknown_model(name: &str) -> String {
     format!(
-        "unknown material model `{name}`, expected one of {}, `nacc`",
-        elastic_names()
+        "unknown material model `{name}`, expected one of {}",
+        ModelName::all()
             .iter()
             .map(|n| format!("`{n}`"))
             .collect::<Vec<_>>()
@@ -105,22 +68,32 @@ fn unknown_model(name: &str) -> String {
     )
 }
 
+/// The keys every material has.
+const COMMON: [&str; 4] = ["model", "E", "nu", "density"];
+
 impl Serialize for MaterialSpec {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            MaterialSpec::Elastic(m) => m.serialize(s),
-            MaterialSpec::Nacc(m) => m.serialize(s),
+        use serde::ser::SerializeMap;
+        let mut map = s.serialize_map(Some(4 + self.params.len()))?;
+        map.serialize_entry("model", self.model.name())?;
+        map.serialize_entry("E", &self.e)?;
+        map.serialize_entry("nu", &self.nu)?;
+        map.serialize_entry("density", &self.density)?;
+        for (key, value) in &self.params {
+            map.serialize_entry(key, value)?;
         }
+        map.end()
     }
 }
 
 impl<'de> Deserialize<'de> for MaterialSpec {
-    /// By `model`: `nacc`, or a registered elastic model.
+    /// By `model`; a plastic law's parameters are read by its own type (unknown or
+    /// mistyped fields refused here), their ranges checked by [`MaterialSpec::build`].
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         use serde::de::Error;
-        let value = serde_json::Value::deserialize(d)?;
-        let model = match value.get("model") {
-            Some(serde_json::Value::String(m)) => m.clone(),
+        let mut object = Map::deserialize(d)?;
+        let model = match object.remove("model") {
+            Some(Value::String(m)) => m,
             Some(other) => {
                 return Err(D::Error::custom(format!(
                     "`model` {other}: expected a string"
@@ -128,18 +101,90 @@ impl<'de> Deserialize<'de> for MaterialSpec {
             }
             None => return Err(D::Error::missing_field("model")),
         };
-        if model == "nacc" {
-            NaccSpec::deserialize(value)
-                .map(MaterialSpec::Nacc)
-                .map_err(D::Error::custom)
-        } else if ElasticModel::from_name(&model).is_some() {
-            ElasticSpec::deserialize(value)
-                .map(MaterialSpec::Elastic)
-                .map_err(D::Error::custom)
-        } else {
-            Err(D::Error::custom(unknown_model(&model)))
+        let model =
+            ModelName::from_name(&model).ok_or_else(|| D::Error::custom(unknown_model(&model)))?;
+        let mut number = |key: &'static str| match object.remove(key) {
+            Some(v) => v
+                .as_f64()
+                .ok_or_else(|| D::Error::custom(format!("`{key}` {v}: expected a number"))),
+            None => Err(D::Error::missing_field(key)),
+        };
+        let (e, nu, density) = (number("E")?, number("nu")?, number("density")?);
+        let spec = MaterialSpec {
+            model,
+            e,
+            nu,
+            density,
+            params: object,
+        };
+        match model {
+            ModelName::Elastic(_) => {
+                if let Some(key) = spec.params.keys().next() {
+                    return Err(D::Error::custom(format!(
+                        "unknown field `{key}` for the elastic model `{}`, expected one of {}",
+                        model.name(),
+                        COMMON.map(|k| format!("`{k}`")).join(", ")
+                    )));
+                }
+            }
+            ModelName::Plastic(law) => {
+                if let Err(ParseError::Json(e)) =
+                    law.parse(Value::Object(spec.params.clone()), e, nu)
+                {
+                    return Err(D::Error::custom(format!("{} parameters: {e}", law.name())));
+                }
+            }
         }
+        Ok(spec)
     }
+}
+
+/// The schema of one elastic model's material.
+fn elastic_schema() -> schemars::Schema {
+    schemars::json_schema!({
+        "description": "An elastic material, no plasticity (docs/method.md §3).",
+        "type": "object",
+        "properties": {
+            "model": { "type": "string", "enum": ElasticModel::ALL.iter().map(|m| m.def().name).collect::<Vec<_>>() },
+            "E": { "type": "number", "description": "Young's modulus in Pa (> 0)" },
+            "nu": { "type": "number", "description": "Poisson ratio in (−1, 0.5)" },
+            "density": { "type": "number", "description": "density in kg/m³ (> 0)" }
+        },
+        "required": ["model", "E", "nu", "density"],
+        "additionalProperties": false
+    })
+}
+
+/// The schema of a plastic law's material: the common keys and the law's parameters.
+fn plastic_schema(
+    law: PlasticModel,
+    generator: &mut schemars::SchemaGenerator,
+) -> schemars::Schema {
+    let mut schema = elastic_schema();
+    let params = law.params_schema(generator);
+    let object = schema.as_object_mut().expect("an object schema");
+    object.insert(
+        "description".into(),
+        format!(
+            "The plastic law `{}` on {} elasticity (docs/method.md §4); α holds {}.",
+            law.name(),
+            law.elastic().map_or("any", |m| m.def().name),
+            law.alpha_meaning()
+        )
+        .into(),
+    );
+    object["properties"]["model"] = serde_json::json!({ "const": law.name() });
+    if let Some(Value::Object(props)) = params.get("properties") {
+        let target = object["properties"].as_object_mut().expect("properties");
+        target.extend(props.clone());
+    }
+    if let Some(Value::Array(required)) = params.get("required") {
+        object["required"]
+            .as_array_mut()
+            .expect("required")
+            .extend(required.clone());
+    }
+    schema
 }
 
 impl JsonSchema for MaterialSpec {
@@ -147,34 +192,25 @@ impl JsonSchema for MaterialSpec {
         "MaterialSpec".into()
     }
     fn json_schema(generator: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut one_of = vec![elastic_schema()];
+        for &law in PlasticModel::LAWS {
+            one_of.push(plastic_schema(law, generator));
+        }
         schemars::json_schema!({
-            "description": "A material: a registered elastic model, or NACC (docs/method.md §3–§4).",
-            "oneOf": [generator.subschema_for::<ElasticSpec>(), generator.subschema_for::<NaccSpec>()]
+            "description": "A material: a registered elastic model, or a registered plastic law on its elasticity (docs/method.md §3–§4).",
+            "oneOf": one_of
         })
     }
 }
 
-fn default_mapping() -> ReturnMappingSpec {
-    ReturnMappingSpec::Continuous
-}
-fn default_k() -> f64 {
-    2.0
-}
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, JsonSchema, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ReturnMappingSpec {
-    Center,
-    Continuous,
-    ClosestPoint,
-}
-
 impl MaterialSpec {
     pub fn density(&self) -> f64 {
-        match self {
-            MaterialSpec::Elastic(m) => m.density,
-            MaterialSpec::Nacc(m) => m.density,
-        }
+        self.density
+    }
+
+    /// Whether the material breaks into pieces (its plastic law's α measures damage).
+    pub fn fractures(&self) -> bool {
+        matches!(self.model, ModelName::Plastic(law) if law.fractures())
     }
 
     /// Check the values and build the material; `field` names it in errors.
@@ -182,10 +218,7 @@ impl MaterialSpec {
         let bad = |name: &str, v: f64, expected: &str| {
             SceneError::invalid(origin, format!("{field}.{name}"), v, expected)
         };
-        let (e, nu, density) = match self {
-            MaterialSpec::Elastic(m) => (m.e, m.nu, m.density),
-            MaterialSpec::Nacc(m) => (m.e, m.nu, m.density),
-        };
+        let (e, nu, density) = (self.e, self.nu, self.density);
         if !(e.is_finite() && e > 0.0) {
             return Err(bad("E", e, "Young's modulus > 0"));
         }
@@ -195,63 +228,70 @@ impl MaterialSpec {
         if !(density.is_finite() && density > 0.0) {
             return Err(bad("density", density, "a density > 0"));
         }
-        Ok(match self {
-            MaterialSpec::Elastic(m) => Material::elastic(m.model.0, e, nu),
-            MaterialSpec::Nacc(NaccSpec {
-                alpha0,
-                beta,
-                xi,
-                m_slope,
-                friction_angle_deg,
-                return_mapping,
-                k,
-                ..
-            }) => {
-                let m_slope = match (m_slope, friction_angle_deg) {
-                    (Some(m), None) if m.is_finite() && *m > 0.0 => *m,
-                    (Some(m), None) => return Err(bad("M", *m, "a slope > 0")),
-                    (None, Some(phi)) if phi.is_finite() && *phi > 0.0 && *phi < 90.0 => {
-                        m_from_friction_angle(phi.to_radians())
-                    }
-                    (None, Some(phi)) => {
-                        return Err(bad("friction_angle_deg", *phi, "an angle in (0, 90)"))
-                    }
-                    _ => {
-                        return Err(SceneError::invalid(
+        match self.model {
+            ModelName::Elastic(model) => Ok(Material::elastic(model, e, nu)),
+            ModelName::Plastic(law) => {
+                let plastic = law
+                    .parse(Value::Object(self.params.clone()), e, nu)
+                    .map_err(|err| match err {
+                        ParseError::Param(p) => SceneError::invalid(
+                            origin,
+                            format!("{field}.{}", p.field),
+                            p.value,
+                            p.expected,
+                        ),
+                        ParseError::Json(j) => SceneError::invalid(
                             origin,
                             field.to_string(),
-                            "M and friction_angle_deg",
-                            "exactly one of `M` or `friction_angle_deg`",
-                        ))
-                    }
-                };
-                for (name, v, ok) in [
-                    ("alpha0", *alpha0, alpha0.is_finite()),
-                    ("beta", *beta, beta.is_finite() && *beta >= 0.0),
-                    ("xi", *xi, xi.is_finite() && *xi >= 0.0),
-                    ("k", *k, k.is_finite() && *k > 0.0),
-                ] {
-                    if !ok {
-                        return Err(bad(name, v, "a finite value (β, ξ ≥ 0; k > 0)"));
-                    }
-                }
-                let variant = match return_mapping {
-                    ReturnMappingSpec::Center => Case3Variant::Center,
-                    ReturnMappingSpec::Continuous => Case3Variant::Continuous { k: *k },
-                    ReturnMappingSpec::ClosestPoint => Case3Variant::ClosestPoint,
-                };
-                Material::Nacc {
-                    params: NaccParams {
-                        e,
-                        nu,
-                        alpha0: *alpha0,
-                        beta: *beta,
-                        xi: *xi,
-                        m_slope,
-                    },
-                    variant,
-                }
+                            law.name(),
+                            j.to_string(),
+                        ),
+                    })?;
+                let mut material =
+                    Material::elastic(law.elastic().expect("a law has its elastic model"), e, nu);
+                material.plastic = plastic;
+                Ok(material)
             }
-        })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every registered name parses, and no elastic model shares a name with a law.
+    #[test]
+    fn registered_names_are_distinct_and_parse() {
+        let names = ModelName::all();
+        let unique: std::collections::HashSet<_> = names.iter().collect();
+        assert_eq!(unique.len(), names.len(), "{names:?}");
+        assert!(!names.contains(&"none"));
+    }
+
+    /// A material reads and writes back as written, and a law's range error names the
+    /// field.
+    #[test]
+    fn round_trip_and_errors() {
+        let text = r#"{"model":"von_mises","E":1000000.0,"nu":0.3,"density":1000.0,"yield_stress":5000.0}"#;
+        let spec: MaterialSpec = serde_json::from_str(text).unwrap();
+        assert_eq!(serde_json::to_string(&spec).unwrap(), text);
+        let m = spec.build("s.json", "m").unwrap();
+        assert_eq!(m.plastic_model(), PlasticModel::VonMises);
+        assert_eq!(m.elastic_model(), ElasticModel::StvkHencky);
+        let bad: MaterialSpec = serde_json::from_str(&text.replace("5000.0", "-1.0")).unwrap();
+        let err = bad.build("s.json", "m").unwrap_err().to_string();
+        assert!(err.contains("m.yield_stress"), "{err}");
+        for refused in [
+            r#"{"model":"von_mises","E":1e6,"nu":0.3,"density":1000,"yield":5}"#,
+            r#"{"model":"neo_hookean","E":1e6,"nu":0.3,"density":1000,"yield_stress":5}"#,
+            r#"{"model":"sand","E":1e6,"nu":0.3,"density":1000}"#,
+            r#"{"model":"snow","nu":0.3,"density":1000}"#,
+        ] {
+            assert!(
+                serde_json::from_str::<MaterialSpec>(refused).is_err(),
+                "{refused}"
+            );
+        }
     }
 }

@@ -7,9 +7,7 @@ use glam::DVec3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-pub use super::material::{
-    ElasticModelName, ElasticSpec, MaterialSpec, NaccSpec, NaccTag, ReturnMappingSpec,
-};
+pub use super::material::{MaterialSpec, ModelName};
 use super::SceneError;
 use crate::sim::{BoundaryKind, Condition, Separation, Transfer};
 

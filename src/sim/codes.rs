@@ -11,7 +11,7 @@
 
 use super::boundary::BoundaryKind;
 use super::kinematic::ColliderShape;
-use super::nacc::{Case3Variant, ReturnCase};
+use super::nacc::{Case3Variant, ReturnCase, ReturnMapping};
 
 /// Materials a simulation may have (the GPU step's constant table).
 pub const MAX_MATERIALS: usize = 16;
@@ -81,29 +81,29 @@ impl ColliderShape {
     }
 }
 
-impl Case3Variant {
-    /// One variant of each kind (`k` does not matter for the code).
-    pub const KINDS: [Case3Variant; 3] = [
-        Case3Variant::Center,
-        Case3Variant::Continuous { k: 0.0 },
-        Case3Variant::ClosestPoint,
-    ];
-
+impl ReturnMapping {
     /// `NaccMaterial.variant` on the GPU (WGSL `NACC_VARIANT_*`).
-    pub fn gpu_code(&self) -> u32 {
+    pub fn gpu_code(self) -> u32 {
         match self {
-            Case3Variant::Center => 0,
-            Case3Variant::Continuous { .. } => 1,
-            Case3Variant::ClosestPoint => 2,
+            ReturnMapping::Center => 0,
+            ReturnMapping::Continuous => 1,
+            ReturnMapping::ClosestPoint => 2,
         }
     }
 
-    fn wgsl_name(&self) -> &'static str {
+    fn wgsl_name(self) -> &'static str {
         match self {
-            Case3Variant::Center => "NACC_VARIANT_CENTER",
-            Case3Variant::Continuous { .. } => "NACC_VARIANT_CONTINUOUS",
-            Case3Variant::ClosestPoint => "NACC_VARIANT_CLOSEST_POINT",
+            ReturnMapping::Center => "NACC_VARIANT_CENTER",
+            ReturnMapping::Continuous => "NACC_VARIANT_CONTINUOUS",
+            ReturnMapping::ClosestPoint => "NACC_VARIANT_CLOSEST_POINT",
         }
+    }
+}
+
+impl Case3Variant {
+    /// `NaccMaterial.variant` on the GPU (WGSL `NACC_VARIANT_*`): its mapping's code.
+    pub fn gpu_code(&self) -> u32 {
+        self.mapping().gpu_code()
     }
 }
 
@@ -143,7 +143,7 @@ impl ReturnCase {
 
 /// The constants the material modules read (`shaders/sim/nacc.wgsl`), name and value.
 pub fn material_constants() -> Vec<(&'static str, u32)> {
-    let variants = Case3Variant::KINDS
+    let variants = ReturnMapping::ALL
         .iter()
         .map(|v| (v.wgsl_name(), v.gpu_code()));
     let cases = ReturnCase::ALL.map(|c| (c.wgsl_name(), c.gpu_code()));
@@ -190,8 +190,9 @@ mod tests {
     use super::*;
     use crate::sim::boundary::Condition;
     use crate::sim::kinematic::{KinematicCollider, RigidMotion};
-    use crate::sim::step::layout::{GpuCondition, GpuKinematic};
+    use crate::sim::step::layout::{GpuCondition, GpuKinematic, GpuMaterial};
     use crate::sim::wgsl::NaccMaterialGpu;
+    use crate::sim::Material;
     use wgpu::naga;
 
     /// The value of every u32 `const` of `src`, as naga reads it after the module validates.
@@ -247,11 +248,19 @@ mod tests {
             xi: 2.0,
             m_slope: 2.36,
         };
-        for variant in Case3Variant::KINDS {
+        for mapping in ReturnMapping::ALL {
+            let variant = mapping.variant(2.0);
             let record = NaccMaterialGpu::new(&params, variant);
             assert_eq!(
                 record.variant,
-                step_constant(variant.wgsl_name()),
+                step_constant(mapping.wgsl_name()),
+                "{variant:?}"
+            );
+            // The step's record carries it among NACC's parameters (`Nacc::gpu_params`).
+            let step_record = GpuMaterial::from_material(&Material::nacc(params, variant));
+            assert_eq!(
+                step_record.params[4].to_bits(),
+                record.variant,
                 "{variant:?}"
             );
         }
@@ -274,7 +283,7 @@ mod tests {
         let families: [Vec<u32>; 4] = [
             BoundaryKind::ALL.map(|k| k.gpu_code()).to_vec(),
             ColliderShape::KINDS.iter().map(|s| s.gpu_code()).collect(),
-            Case3Variant::KINDS.iter().map(|v| v.gpu_code()).collect(),
+            ReturnMapping::ALL.iter().map(|v| v.gpu_code()).collect(),
             ReturnCase::ALL.map(|c| c.gpu_code()).to_vec(),
         ];
         for codes in families {

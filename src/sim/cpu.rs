@@ -123,7 +123,7 @@ pub fn p2g(
             let st = Stencil::new(particles.x[p] - grid.lo, dx);
             let m = particles.mass[p];
             let mat = &materials[particles.material[p] as usize];
-            let tau = mat.kirchhoff(particles.f[p]);
+            let tau = mat.kirchhoff(particles.f[p], particles.alpha[p]);
             let mut affine = tau * (-dt * particles.volume0[p] * inv_d);
             if apic {
                 affine += particles.c[p] * m;
@@ -710,7 +710,7 @@ mod tests {
         let mut p_ref = vec![DVec3::ZERO; g.node_count()];
         for q in 0..p.len() {
             let st = g.stencil(p.x[q]).unwrap();
-            let tau = mats[p.material[q] as usize].kirchhoff(p.f[q]);
+            let tau = mats[p.material[q] as usize].kirchhoff(p.f[q], p.alpha[q]);
             let a = p.c[q] * p.mass[q] - tau * (dt * p.volume0[q] * 4.0 / (dx * dx));
             for o in crate::sim::bspline::stencil_offsets() {
                 let i = g.index(st.node(o).as_uvec3());

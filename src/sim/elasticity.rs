@@ -61,6 +61,34 @@ pub fn kirchhoff_neo_hookean(f: DMat3, lame: &Lame) -> DMat3 {
     dev(b) * (lame.mu * j.powf(-2.0 / 3.0)) + DMat3::IDENTITY * (0.5 * lame.kappa() * (j * j - 1.0))
 }
 
+/// The Hencky (logarithmic) strains ε = ln σ of the singular values σ of F, clamped to
+/// σ ≥ [`HENCKY_SIGMA_MIN`] (an inverted or flat F has no logarithm).
+pub fn hencky_strain(sigma: DVec3) -> DVec3 {
+    let sigma = sigma.max(DVec3::splat(HENCKY_SIGMA_MIN));
+    DVec3::new(sigma.x.ln(), sigma.y.ln(), sigma.z.ln())
+}
+
+/// Singular values below this are clamped before their logarithm (as NACC's `SIGMA_MIN`).
+pub const HENCKY_SIGMA_MIN: f64 = 1e-4;
+
+/// St. Venant–Kirchhoff on the Hencky strain (docs/method.md §3), the elasticity under
+/// Drucker–Prager and von Mises plasticity: τ = U (2μ ε + λ tr(ε) I) Uᵀ with ε = ln σ.
+/// Linear in the logarithmic strain, so the return mappings stay radial in it.
+pub fn kirchhoff_stvk_hencky(f: DMat3, lame: &Lame) -> DMat3 {
+    let s = svd3(f);
+    let (u, eps) = (s.u, hencky_strain(s.sigma));
+    let tr = eps.x + eps.y + eps.z;
+    let t = eps * (2.0 * lame.mu) + DVec3::splat(lame.lambda * tr);
+    u * DMat3::from_diagonal(t) * u.transpose()
+}
+
+/// St. Venant–Kirchhoff Hencky strain energy density μ ‖ε‖² + λ/2 (tr ε)².
+pub fn energy_stvk_hencky(f: DMat3, lame: &Lame) -> f64 {
+    let eps = hencky_strain(svd3(f).sigma);
+    let tr = eps.x + eps.y + eps.z;
+    lame.mu * eps.length_squared() + 0.5 * lame.lambda * tr * tr
+}
+
 /// Fixed-corotated strain energy density μ Σ(σᵢ − 1)² + λ/2 (J − 1)².
 pub fn energy_fixed_corotated(f: DMat3, lame: &Lame) -> f64 {
     let j = f.determinant();

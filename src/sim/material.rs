@@ -1,25 +1,22 @@
-//! The materials a particle can have (docs/method.md §3–§4): an elastic model, or NACC
-//! plasticity on top of Neo-Hookean. Shared by the CPU reference step, the GPU step and
-//! the scene setup.
+//! The materials a particle can have (docs/method.md §3–§4): a registered elastic model,
+//! with a registered plastic model (or none) after each F update. Shared by the CPU
+//! reference step, the GPU step and the scene setup. The models themselves, and what
+//! each plastic model keeps in the particle's hardening state α, are in
+//! [`super::models`].
 
 use glam::DMat3;
 
 use super::elasticity::Lame;
-use super::models::{ElasticModel, PlasticModel};
-use super::nacc::{return_map, Case3Variant, NaccParams};
+use super::models::{ElasticModel, Nacc, Plastic, PlasticLaw, PlasticModel};
+use super::nacc::{Case3Variant, NaccParams};
 
-/// A material: an elastic model, or NACC plasticity on top of Neo-Hookean (docs/method.md §3–§4).
-/// The models themselves are registered in [`super::models`].
+/// A material: the elastic model of the stress with its Lamé parameters, and the plastic
+/// model after the F update.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Material {
-    /// An elastic model without plasticity. Neo-Hookean needs det F > 0 (an inverted F
-    /// gives NaN, which [`super::cpu::check`] reports).
-    Elastic { model: ElasticModel, lame: Lame },
-    /// Neo-Hookean stress with the NACC return mapping and hardening after each F update.
-    Nacc {
-        params: NaccParams,
-        variant: Case3Variant,
-    },
+pub struct Material {
+    pub elastic: ElasticModel,
+    pub lame: Lame,
+    pub plastic: Plastic,
 }
 
 impl Material {
@@ -28,91 +25,91 @@ impl Material {
         Self::elastic(ElasticModel::FixedCorotated, e, nu)
     }
 
-    /// Neo-Hookean (Borden) from Young's modulus and Poisson ratio.
+    /// Neo-Hookean (Borden) from Young's modulus and Poisson ratio. Needs det F > 0 (an
+    /// inverted F gives NaN, which [`super::cpu::check`] reports).
     pub fn neo_hookean(e: f64, nu: f64) -> Self {
         Self::elastic(ElasticModel::NeoHookean, e, nu)
     }
 
-    /// Any registered elastic model from Young's modulus and Poisson ratio.
+    /// Any registered elastic model from Young's modulus and Poisson ratio, no plasticity.
     pub fn elastic(model: ElasticModel, e: f64, nu: f64) -> Self {
-        Material::Elastic {
-            model,
+        Material {
+            elastic: model,
             lame: Lame::from_young_poisson(e, nu),
+            plastic: Plastic::None,
         }
+    }
+
+    /// A registered plastic law on its own elastic model, from Young's modulus and Poisson
+    /// ratio.
+    pub fn plastic<L: PlasticLaw>(law: L, e: f64, nu: f64) -> Self
+    where
+        Plastic: From<L>,
+    {
+        Material {
+            elastic: L::ELASTIC,
+            lame: Lame::from_young_poisson(e, nu),
+            plastic: law.into(),
+        }
+    }
+
+    /// NACC (CD-MPM) with its case-3 variant.
+    pub fn nacc(params: NaccParams, variant: Case3Variant) -> Self {
+        Self::plastic(Nacc { params, variant }, params.e, params.nu)
     }
 
     /// Lamé parameters of the elastic part.
     pub fn lame(&self) -> Lame {
-        match self {
-            Material::Elastic { lame, .. } => *lame,
-            Material::Nacc { params, .. } => params.lame(),
-        }
+        self.lame
     }
 
     /// The elastic model of the stress.
     pub fn elastic_model(&self) -> ElasticModel {
-        match self {
-            Material::Elastic { model, .. } => *model,
-            Material::Nacc { .. } => ElasticModel::NeoHookean,
-        }
+        self.elastic
     }
 
     /// The plastic model after the F update.
     pub fn plastic_model(&self) -> PlasticModel {
-        match self {
-            Material::Elastic { .. } => PlasticModel::None,
-            Material::Nacc { .. } => PlasticModel::Nacc,
-        }
+        self.plastic.model()
     }
 
-    /// Whether the material carries a hardening state α (whose α ≥ 0 counts as damaged).
+    /// Whether the material carries a hardening state α.
     pub fn has_hardening_state(&self) -> bool {
         self.plastic_model() != PlasticModel::None
     }
 
-    /// Damage d ∈ [0, 1] of a particle with hardening state `alpha` (what `sim::separation`
-    /// splits the grid by): for NACC the share of the initial cohesion −α₀ that α has lost,
-    /// clamp((α − α₀)/(−α₀), 0, 1), so 0 when fresh or compacted and 1 at α ≥ 0, where the
-    /// material holds no tension (1 everywhere for a material that starts without
-    /// cohesion, α₀ ≥ 0); 0 for the elastic models.
+    /// Whether the material breaks into pieces: its α measures damage
+    /// ([`super::models::PlasticLaw::FRACTURES`]).
+    pub fn fractures(&self) -> bool {
+        self.plastic_model().fractures()
+    }
+
+    /// Damage d ∈ [0, 1] of a particle with hardening state `alpha` (what
+    /// `sim::separation` splits the grid by; 1 counts as damaged in `fragments.csv`).
     pub fn damage(&self, alpha: f64) -> f64 {
-        match self {
-            Material::Nacc { params, .. } if params.alpha0 < 0.0 => {
-                ((alpha - params.alpha0) / -params.alpha0).clamp(0.0, 1.0)
-            }
-            Material::Nacc { .. } => 1.0,
-            Material::Elastic { .. } => 0.0,
-        }
+        self.plastic.damage(alpha)
     }
 
     /// P-wave modulus λ + 2μ (CFL sound speed c = sqrt((λ + 2μ)/ρ)).
     pub fn p_wave_modulus(&self) -> f64 {
-        self.lame().p_wave_modulus()
+        self.lame.p_wave_modulus()
     }
 
-    /// α a fresh particle starts with: α₀ for NACC, 0 otherwise (unused there).
+    /// α a fresh particle starts with.
     pub fn initial_alpha(&self) -> f64 {
-        match self {
-            Material::Nacc { params, .. } => params.alpha0,
-            _ => 0.0,
-        }
+        self.plastic.initial_alpha()
     }
 
-    /// Kirchhoff stress τ(F) (docs/method.md §3).
-    pub fn kirchhoff(&self, f: DMat3) -> DMat3 {
-        self.elastic_model().kirchhoff(f, &self.lame())
+    /// Kirchhoff stress τ(F) at hardening state α (docs/method.md §3): the elastic model's,
+    /// times the plastic model's hardening factor.
+    pub fn kirchhoff(&self, f: DMat3, alpha: f64) -> DMat3 {
+        self.elastic.kirchhoff(f, &self.lame) * self.plastic.stress_scale(alpha)
     }
 
-    /// The plastic step after the F update: (F, α) unchanged for the elastic models, the
-    /// NACC return mapping (docs/method.md §4) otherwise.
+    /// The plastic step after the F update: the return mapping of the plastic model
+    /// (docs/method.md §4), (F, α) unchanged without one.
     pub fn plasticity(&self, f_trial: DMat3, alpha: f64) -> (DMat3, f64) {
-        match self {
-            Material::Nacc { params, variant } => {
-                let r = return_map(f_trial, alpha, params, *variant);
-                (r.f, r.alpha)
-            }
-            _ => (f_trial, alpha),
-        }
+        self.plastic.return_map(f_trial, alpha, &self.lame)
     }
 }
 

@@ -162,6 +162,76 @@ pub enum Case3Variant {
     ClosestPoint,
 }
 
+/// A case-3 return mapping by name: what the scene file's `return_mapping`, the command
+/// line's `--shatter-mapping`, the shatter study and the GPU's `NACC_VARIANT_*` code
+/// (`sim::codes`) all name. [`ReturnMapping::variant`] adds the `continuous` exponent.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    PartialEq,
+    Eq,
+    Hash,
+    serde::Serialize,
+    serde::Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ReturnMapping {
+    Center,
+    Continuous,
+    ClosestPoint,
+}
+
+impl ReturnMapping {
+    /// Every mapping, in GPU code order.
+    pub const ALL: [ReturnMapping; 3] = [
+        ReturnMapping::Center,
+        ReturnMapping::Continuous,
+        ReturnMapping::ClosestPoint,
+    ];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            ReturnMapping::Center => "center",
+            ReturnMapping::Continuous => "continuous",
+            ReturnMapping::ClosestPoint => "closest_point",
+        }
+    }
+
+    /// The mapping of a name.
+    pub fn from_name(name: &str) -> Option<ReturnMapping> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The variant, with exponent `k` for `continuous`.
+    pub fn variant(self, k: f64) -> Case3Variant {
+        match self {
+            ReturnMapping::Center => Case3Variant::Center,
+            ReturnMapping::Continuous => Case3Variant::Continuous { k },
+            ReturnMapping::ClosestPoint => Case3Variant::ClosestPoint,
+        }
+    }
+}
+
+impl std::fmt::Display for ReturnMapping {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl Case3Variant {
+    /// Its mapping by name.
+    pub fn mapping(&self) -> ReturnMapping {
+        match self {
+            Case3Variant::Center => ReturnMapping::Center,
+            Case3Variant::Continuous { .. } => ReturnMapping::Continuous,
+            Case3Variant::ClosestPoint => ReturnMapping::ClosestPoint,
+        }
+    }
+}
+
 /// Which row of docs/method.md §4's return-mapping table applied.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ReturnCase {

@@ -264,7 +264,7 @@ fn run_one(sweep: &str, value: f64, name: &str, variant: Case3Variant, quick: bo
         xi: 2.0,
         m_slope: 2.36,
     };
-    let material = Material::Nacc { params, variant };
+    let material = Material::nacc(params, variant);
     let dx = if quick { 0.04 } else { DX };
     let center = DVec3::new(0.2, GROUND + RADIUS + 0.02, 0.2);
     let mut p = Particles::sample_sphere(center, RADIUS, dx / 2.0, 2.0);

@@ -394,8 +394,8 @@ fn cantilever(cells: u32, cfl: f64, ppc_axis: u32, sweep: &str) -> ConvRun {
 /// M 2.36, `continuous` k = 2, ρ 2, 12 m/s onto a sticky ground; radius 0.1 instead of
 /// 0.12); the particles at t = 0.03 s (about 0.025 s after impact).
 fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
-    let material = Material::Nacc {
-        params: NaccParams {
+    let material = Material::nacc(
+        NaccParams {
             e: 2000.0,
             nu: 0.4,
             alpha0: -0.01,
@@ -403,8 +403,8 @@ fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
             xi: 2.0,
             m_slope: 2.36,
         },
-        variant: Case3Variant::Continuous { k: 2.0 },
-    };
+        Case3Variant::Continuous { k: 2.0 },
+    );
     let (radius, speed, t_end) = (0.1, 12.0, 0.03);
     let center = DVec3::new(0.3, 0.1 + radius + 0.06, 0.3);
     let mut p = Particles::sample_sphere(center, radius, dx / 2.0, 2.0);

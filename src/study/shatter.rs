@@ -18,19 +18,20 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use crate::run::{one_line, Event, Input, Run, RunOptions};
+use crate::sim::nacc::ReturnMapping;
 
 /// Grid spacings of the full study (metres), coarse to fine, and of `--quick`.
 pub const DX_FULL: [f64; 3] = [0.03, 0.02, 0.015];
 pub const DX_QUICK: [f64; 2] = [0.04, 0.03];
 
 /// The return mappings compared.
-pub const MAPPINGS: [&str; 2] = ["continuous", "center"];
+pub const MAPPINGS: [ReturnMapping; 2] = [ReturnMapping::Continuous, ReturnMapping::Center];
 
 /// One run of the study.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ShatterRun {
     pub dx: f64,
-    pub mapping: String,
+    pub mapping: ReturnMapping,
     /// One quarter of the fruit between two symmetry planes ([`cut_to_quarter`]): the
     /// counts and shares are the quarter's.
     #[serde(default)]
@@ -66,7 +67,7 @@ pub struct ShatterPlan<'a> {
     /// Grid spacings, coarse to fine.
     pub dxs: &'a [f64],
     /// Return mappings, a subset of [`MAPPINGS`].
-    pub mappings: &'a [&'static str],
+    pub mappings: &'a [ReturnMapping],
     /// 6 frames instead of 24.
     pub quick: bool,
     /// One quarter of the fruit ([`cut_to_quarter`]).
@@ -78,7 +79,7 @@ pub enum ShatterEvent<'a> {
     /// Frame `frame` of `frames` of the run at `dx` with `mapping` is done.
     Frame {
         dx: f64,
-        mapping: &'a str,
+        mapping: ReturnMapping,
         frame: u32,
         frames: u32,
     },
@@ -190,10 +191,10 @@ pub fn merge(earlier: ShatterReport, new: ShatterReport) -> ShatterReport {
         .filter(|old| !new.runs.iter().any(|n| same(old, n)))
         .collect();
     runs.extend(new.runs);
-    let order = |m: &str| {
+    let order = |m: &ReturnMapping| {
         MAPPINGS
             .iter()
-            .position(|x| *x == m)
+            .position(|x| x == m)
             .unwrap_or(MAPPINGS.len())
     };
     runs.sort_by(|a, b| {
@@ -222,7 +223,7 @@ fn side_by_side(pair: &[PathBuf; 2], out: &Path) -> Result<()> {
 fn run_one(
     gpu: &crate::gpu::GpuContext,
     (scene, value): (&Path, &Value),
-    (dx, mapping): (f64, &str),
+    (dx, mapping): (f64, ReturnMapping),
     frames: u32,
     still: Option<&Path>,
     on_event: &mut dyn FnMut(ShatterEvent),
@@ -274,11 +275,11 @@ fn run_one(
 }
 
 /// Every NACC material of the scene gets `mapping`.
-fn set_mapping(v: &mut Value, mapping: &str) {
+fn set_mapping(v: &mut Value, mapping: ReturnMapping) {
     match v {
         Value::Object(map) => {
             if map.get("model").and_then(|m| m.as_str()) == Some("nacc") {
-                map.insert("return_mapping".into(), mapping.into());
+                map.insert("return_mapping".into(), mapping.name().into());
             }
             map.values_mut().for_each(|x| set_mapping(x, mapping));
         }
@@ -355,7 +356,13 @@ fn read_rows(path: &Path) -> Result<Vec<Row>> {
     Ok(rows)
 }
 
-fn summarise(rows: &[Row], dx: f64, mapping: &str, frames: u32, wall_s: f64) -> Result<ShatterRun> {
+fn summarise(
+    rows: &[Row],
+    dx: f64,
+    mapping: ReturnMapping,
+    frames: u32,
+    wall_s: f64,
+) -> Result<ShatterRun> {
     let (Some(first), Some(last)) = (rows.first(), rows.last()) else {
         bail!("fragments.csv has no watermelon rows");
     };
@@ -364,7 +371,7 @@ fn summarise(rows: &[Row], dx: f64, mapping: &str, frames: u32, wall_s: f64) -> 
     let energy_max = later.iter().map(|r| r.energy).fold(f64::MIN, f64::max);
     Ok(ShatterRun {
         dx,
-        mapping: mapping.into(),
+        mapping,
         quarter: false,
         particles: first.particles,
         frames,
@@ -396,7 +403,7 @@ mod tests {
         std::fs::write(&path, CSV).unwrap();
         let rows = read_rows(&path).unwrap();
         assert_eq!(rows.len(), 3, "the table's rows are left out");
-        let run = summarise(&rows, 0.02, "center", 3, 1.0).unwrap();
+        let run = summarise(&rows, 0.02, ReturnMapping::Center, 3, 1.0).unwrap();
         assert_eq!((run.particles, run.pieces, run.fragments), (100, 2, 3));
         assert_eq!((run.largest_share, run.damaged_share), (0.6, 0.25));
         assert_eq!(run.speed_ratio, 9.0 / 8.0);
@@ -413,7 +420,7 @@ mod tests {
                             { "material": { "model": "neo_hookean" } }]
             }}]
         });
-        set_mapping(&mut v, "center");
+        set_mapping(&mut v, ReturnMapping::Center);
         let m = &v["objects"][0]["physics"];
         assert_eq!(m["material"]["return_mapping"], "center");
         assert_eq!(m["regions"][0]["material"]["return_mapping"], "center");
@@ -465,7 +472,7 @@ mod tests {
     fn new_runs_replace_their_earlier_twins_and_keep_the_rest() {
         let run = |dx: f64, mapping: &str, quarter: bool, wall_s: f64| ShatterRun {
             dx,
-            mapping: mapping.into(),
+            mapping: ReturnMapping::from_name(mapping).unwrap(),
             quarter,
             particles: 1,
             frames: 24,
@@ -497,7 +504,7 @@ mod tests {
         let got: Vec<(f64, &str, bool, f64)> = merged
             .runs
             .iter()
-            .map(|r| (r.dx, r.mapping.as_str(), r.quarter, r.wall_s))
+            .map(|r| (r.dx, r.mapping.name(), r.quarter, r.wall_s))
             .collect();
         assert_eq!(
             got,

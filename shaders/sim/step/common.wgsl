@@ -160,11 +160,13 @@ fn particle_material(i: u32) -> SimMaterial {
     return step.materials[i];
 }
 
-// The affine momentum term of P2G, m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (docs/method.md §2
-// step 1), from the particle's material, F, C, mass and initial volume.
-fn affine_term(m: SimMaterial, f: mat3x3<f32>, c: mat3x3<f32>, mass: f32, volume: f32) -> mat3x3<f32> {
+// The affine momentum term of P2G, m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p, α_p) (docs/method.md
+// §2 step 1), from the particle's material, F, hardening state, C, mass and initial volume.
+fn affine_term(m: SimMaterial, f: mat3x3<f32>, alpha: f32, c: mat3x3<f32>, mass: f32,
+               volume: f32) -> mat3x3<f32> {
     let inv_d = 4.0 / (consts.dx * consts.dx);
-    var a = material_kirchhoff(m, f) * (-consts.dt * volume * inv_d);
+    let scale = material_stress_scale(m, alpha) * (-consts.dt * volume * inv_d);
+    var a = material_kirchhoff(m, f) * scale;
     if consts.apic == 1u {
         a += c * mass;
     }

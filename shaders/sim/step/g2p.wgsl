@@ -58,8 +58,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         v_volume[p] = vec4<f32>(v, vv.w);
         x_mass[p] = vec4<f32>(xm.xyz + v * consts.dt, xm.w);
         if NEXT_AFFINE {
-            affine[p] = affine_term(particle_material(material[p]), deformation[p], affine_velocity[p],
-                                    xm.w, vv.w);
+            affine[p] = affine_term(particle_material(material[p]), deformation[p], alpha[p],
+                                    affine_velocity[p], xm.w, vv.w);
         }
         return;
     }
@@ -113,7 +113,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     alpha[p] = plastic.alpha;
     deformation[p] = f_new;
     if NEXT_AFFINE {
-        affine[p] = affine_term(m, f_new, c, xm.w, vv.w);
+        affine[p] = affine_term(m, f_new, plastic.alpha, c, xm.w, vv.w);
     }
     if !(sim_is_finite3(v_new) && sim_is_finite_mat3(f_new)) {
         count_failure(0u);

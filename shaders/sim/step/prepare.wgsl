@@ -12,6 +12,7 @@
 @group(0) @binding(6) var<storage, read_write> cell_keys: array<u32>;
 @group(0) @binding(7) var<storage, read_write> cell_values: array<u32>;
 @group(0) @binding(8) var<storage, read_write> affine: array<mat3x3<f32>>;
+@group(0) @binding(9) var<storage, read> alpha: array<f32>;
 
 @compute @workgroup_size(256)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,
@@ -31,6 +32,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let bc = consts.cells - 1u;
     let b = vec3<u32>(st.s.base);
     cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
-    affine[p] = affine_term(particle_material(material[p]), deformation[p], affine_velocity[p], xm.w,
-                            v_volume[p].w);
+    affine[p] = affine_term(particle_material(material[p]), deformation[p], alpha[p],
+                            affine_velocity[p], xm.w, v_volume[p].w);
 }

@@ -6,17 +6,6 @@
 // update makes both fields' velocities meet at a frictionless contact, and G2P reads each
 // particle's own field.
 
-// Damage d ∈ [0, 1] of a particle with hardening state alpha (`Material::damage`).
-fn material_damage(m: SimMaterial, alpha: f32) -> f32 {
-    if m.plastic != PLASTIC_NACC {
-        return 0.0;
-    }
-    if m.nacc.alpha0 < 0.0 {
-        return clamp((alpha - m.nacc.alpha0) / -m.nacc.alpha0, 0.0, 1.0);
-    }
-    return 1.0;
-}
-
 // Whether a particle of damage gradient `gradient` is in the far field of a node whose
 // ridge gradient is `ridge`.
 fn in_far_field(gradient: vec3<f32>, ridge: vec3<f32>) -> bool {

@@ -7,7 +7,7 @@ use glam::{DMat3, DVec3};
 
 use crate::gpu::GpuError;
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
-use crate::sim::wgsl::NaccMaterialGpu;
+use crate::sim::models::PLASTIC_PARAMS;
 use crate::sim::{Condition, Grid, Material, StepParams};
 
 pub use crate::sim::codes::{MAX_COLLIDERS, MAX_KINEMATIC, MAX_MATERIALS};
@@ -22,7 +22,7 @@ pub(crate) fn mat3_to_gpu(m: DMat3) -> [[f32; 4]; 3] {
     ]
 }
 
-/// `SimMaterial` of `shaders/sim/step/common.wgsl`.
+/// `SimMaterial` of `shaders/sim/material.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -33,7 +33,8 @@ pub struct GpuMaterial {
     pub mu: f32,
     pub lambda: f32,
     pub kappa: f32,
-    pub nacc: NaccMaterialGpu,
+    /// The plastic model's parameters (`PlasticLaw::gpu_params`).
+    pub params: [f32; PLASTIC_PARAMS],
 }
 
 /// `Condition` of `shaders/sim/step/common.wgsl`.
@@ -166,18 +167,13 @@ impl GpuMaterial {
     /// The GPU record of `m`: its registered models' codes and parameters.
     pub fn from_material(m: &Material) -> Self {
         let lame = m.lame();
-        let kappa = lame.lambda + 2.0 * lame.mu / 3.0;
-        let nacc = match m {
-            Material::Nacc { params, variant } => NaccMaterialGpu::new(params, *variant),
-            Material::Elastic { .. } => NaccMaterialGpu::default(),
-        };
         GpuMaterial {
             elastic: m.elastic_model().code(),
             plastic: m.plastic_model().code(),
             mu: lame.mu as f32,
             lambda: lame.lambda as f32,
-            kappa: kappa as f32,
-            nacc,
+            kappa: lame.kappa() as f32,
+            params: m.plastic.gpu_params(&lame),
         }
     }
 }
@@ -337,7 +333,7 @@ mod tests {
             &src,
             GpuMaterial,
             "SimMaterial",
-            [elastic, plastic, mu, lambda, kappa, nacc]
+            [elastic, plastic, mu, lambda, kappa, params]
         );
         assert_layout!(&src, GpuCondition, "Condition", [kind, friction]);
         assert_layout!(&src, GpuSurface, "SurfaceCondition", [on, condition]);

@@ -32,6 +32,7 @@ impl Prepare {
                 ("cell_keys", b.window(&b.keys, i, SCALAR)),
                 ("cell_values", b.window(&b.values, i, SCALAR)),
                 ("affine", b.window(&b.affine, i, MAT3)),
+                ("alpha", b.window(&b.alpha, i, SCALAR)),
             ],
         )
     }

@@ -1,0 +1,120 @@
+//! Von Mises (J2) plasticity for metal and plasticine (docs/method.md §4.11): the yield
+//! surface q = √(3/2) ‖τ̂‖ ≤ σ_y + H ε̄ᴾ with linear isotropic hardening, on St.
+//! Venant–Kirchhoff Hencky elasticity, by the radial return in the Hencky strain (exact
+//! for this elasticity: the deviatoric stress is 2μ ε̂). WGSL `von_mises_return_map` in
+//! `shaders/sim/models/von_mises.wgsl`.
+
+use glam::{DMat3, DVec3};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use super::{ElasticModel, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
+use crate::sim::elasticity::{hencky_strain, Lame, HENCKY_SIGMA_MIN};
+use crate::sim::svd::svd3;
+
+/// A von Mises material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VonMises {
+    /// Initial yield stress σ_y in Pa (uniaxial).
+    pub yield_stress: f64,
+    /// Linear hardening modulus H in Pa: σ_y grows by H per unit equivalent plastic strain.
+    pub hardening: f64,
+}
+
+/// The scene file's von Mises parameters.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VonMisesSpec {
+    /// Yield stress σ_y in Pa (> 0): the uniaxial stress at which the material starts to
+    /// flow. Plasticine: 1e3–1e4; soft metal (lead, aluminium): 1e7–1e8.
+    pub yield_stress: f64,
+    /// Linear hardening modulus H in Pa (≥ 0, default 0: perfectly plastic): the yield
+    /// stress after an equivalent plastic strain ε̄ᴾ is σ_y + H ε̄ᴾ.
+    #[serde(default)]
+    pub hardening: f64,
+}
+
+impl VonMises {
+    /// The yield stress after equivalent plastic strain `alpha`.
+    pub fn yield_stress_at(&self, alpha: f64) -> f64 {
+        self.yield_stress + self.hardening * alpha
+    }
+
+    /// The radial return of trial Hencky strains `eps`: the projected strains and the
+    /// equivalent plastic strain increment Δε̄ᴾ (0 when elastic).
+    pub fn project(&self, eps: DVec3, alpha: f64, lame: &Lame) -> (DVec3, f64) {
+        let mean = (eps.x + eps.y + eps.z) / 3.0;
+        let dev = eps - DVec3::splat(mean);
+        let q_trial = 2.0 * lame.mu * (1.5f64).sqrt() * dev.length();
+        let excess = q_trial - self.yield_stress_at(alpha);
+        if excess <= 0.0 {
+            return (eps, 0.0);
+        }
+        let d_eq = excess / (3.0 * lame.mu + self.hardening);
+        let shrink = 1.0 - 3.0 * lame.mu * d_eq / q_trial;
+        (DVec3::splat(mean) + dev * shrink, d_eq)
+    }
+}
+
+impl PlasticLaw for VonMises {
+    const NAME: &'static str = "von_mises";
+    const ELASTIC: ElasticModel = ElasticModel::StvkHencky;
+    const FRACTURES: bool = false;
+    const ALPHA: &'static str = "the equivalent plastic strain ε̄ᴾ";
+    // params: σ_y, H.
+    const WGSL: PlasticWgsl = PlasticWgsl {
+        return_map: "return von_mises_return_map(f, alpha, m.mu, m.params[0], m.params[1]);",
+        damage: "0.0",
+        stress_scale: "1.0",
+        module: include_str!("../../../shaders/sim/models/von_mises.wgsl"),
+    };
+    type Spec = VonMisesSpec;
+
+    fn from_spec(spec: VonMisesSpec, _e: f64, _nu: f64) -> Result<Self, ParamError> {
+        let (y, h) = (spec.yield_stress, spec.hardening);
+        ParamError::check(
+            y.is_finite() && y > 0.0,
+            "yield_stress",
+            y,
+            "a stress in Pa > 0",
+        )?;
+        ParamError::check(
+            h.is_finite() && h >= 0.0,
+            "hardening",
+            h,
+            "a modulus in Pa ≥ 0",
+        )?;
+        Ok(VonMises {
+            yield_stress: y,
+            hardening: h,
+        })
+    }
+
+    /// F = U exp(ε_new) Vᵀ (volume kept: the return is deviatoric); α gains Δε̄ᴾ.
+    fn return_map(&self, f_trial: DMat3, alpha: f64, lame: &Lame) -> (DMat3, f64) {
+        let s = svd3(f_trial);
+        let eps = hencky_strain(s.sigma);
+        let (eps_new, d_eq) = self.project(eps, alpha, lame);
+        if d_eq == 0.0 && s.sigma.min_element() >= HENCKY_SIGMA_MIN {
+            return (f_trial, alpha);
+        }
+        let sigma = DVec3::new(eps_new.x.exp(), eps_new.y.exp(), eps_new.z.exp());
+        (
+            s.u * DMat3::from_diagonal(sigma) * s.v.transpose(),
+            alpha + d_eq,
+        )
+    }
+
+    fn gpu_params(&self, _lame: &Lame) -> [f32; PLASTIC_PARAMS] {
+        [
+            self.yield_stress as f32,
+            self.hardening as f32,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+        ]
+    }
+}
