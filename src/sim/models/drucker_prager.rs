@@ -130,3 +130,114 @@ impl PlasticLaw for DruckerPrager {
         ]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use glam::DQuat;
+
+    fn lame() -> Lame {
+        Lame::from_young_poisson(1e5, 0.3)
+    }
+
+    fn sand(phi_deg: f64, cohesion: f64) -> DruckerPrager {
+        DruckerPrager {
+            friction_angle: phi_deg.to_radians(),
+            cohesion,
+        }
+    }
+
+    fn rotation(r: &mut SplitMix64) -> DMat3 {
+        let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
+        DMat3::from_quat(DQuat::from_xyzw(v.x, v.y, v.z, r.uniform() - 0.5).normalize())
+    }
+
+    /// y(ε) = ‖ε̂‖ + (3κ/2μ) α_dp (tr ε − tr ε_apex): the cone in strain, ≤ 0 inside.
+    fn cone(dp: &DruckerPrager, eps: DVec3, l: &Lame) -> f64 {
+        let tr = eps.x + eps.y + eps.z;
+        let dev = eps - DVec3::splat(tr / 3.0);
+        dev.length() + (3.0 * l.kappa()) / (2.0 * l.mu) * dp.alpha_dp() * (tr - dp.apex_strain(l))
+    }
+
+    /// The cone's slope is Mohr–Coulomb's: α_dp = √(2/3)·2 sin φ/(3 − sin φ), so at 30°
+    /// α_dp = √(2/3)·0.4.
+    #[test]
+    fn slope_and_apex() {
+        let dp = sand(30.0, 0.0);
+        assert!((dp.alpha_dp() - (2.0f64 / 3.0).sqrt() * 0.4).abs() < 1e-14);
+        assert_eq!(dp.apex_strain(&lame()), 0.0);
+        // Cohesion c moves the apex to the mean stress c cot φ.
+        let l = lame();
+        let c = sand(30.0, 100.0).apex_strain(&l) * l.kappa();
+        assert!((c - 100.0 / 30f64.to_radians().tan()).abs() < 1e-9);
+    }
+
+    /// Inside the cone nothing changes; outside, the return lands on the cone (y = 0),
+    /// keeps tr ε (a purely deviatoric return: the flow rule is non-associated, no
+    /// dilation), keeps the direction of ε̂, and F keeps its rotations; a stretched state
+    /// goes to the apex; α gains exactly the plastic volume change.
+    #[test]
+    fn return_lands_on_the_cone_and_keeps_the_volume() {
+        let l = lame();
+        let mut r = SplitMix64::new(7);
+        let (mut inside, mut sheared, mut apex) = (0, 0, 0);
+        for dp in [sand(20.0, 0.0), sand(35.0, 0.0), sand(35.0, 50.0)] {
+            for _ in 0..3000 {
+                let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5) * 0.1;
+                let u = rotation(&mut r);
+                let v = rotation(&mut r);
+                let sigma = DVec3::new(eps.x.exp(), eps.y.exp(), eps.z.exp());
+                let f = u * DMat3::from_diagonal(sigma) * v.transpose();
+                let (f_new, alpha) = dp.return_map(f, 0.25, &l);
+                let eps_new = hencky_strain(svd3(f_new).sigma);
+                let tr = eps.x + eps.y + eps.z;
+                let tr_new = eps_new.x + eps_new.y + eps_new.z;
+                if cone(&dp, eps, &l) <= 0.0 {
+                    inside += 1;
+                    assert_eq!((f_new, alpha), (f, 0.25));
+                } else if tr > dp.apex_strain(&l) {
+                    apex += 1;
+                    let want = DVec3::splat(dp.apex_strain(&l) / 3.0);
+                    assert!((eps_new - want).abs().max_element() < 1e-9, "{eps_new}");
+                } else {
+                    sheared += 1;
+                    assert!(cone(&dp, eps_new, &l).abs() < 1e-9, "not on the cone");
+                    assert!((tr_new - tr).abs() < 1e-9, "tr ε changed");
+                    // Same principal frame: F_new F⁻¹ is symmetric positive in F's
+                    // left frame, i.e. F_new = U diag(σ') Vᵀ with the same U, V.
+                    let back = u.transpose() * f_new * v;
+                    let off = back
+                        - DMat3::from_diagonal(DVec3::new(
+                            back.x_axis.x,
+                            back.y_axis.y,
+                            back.z_axis.z,
+                        ));
+                    assert!(off.to_cols_array().iter().all(|x| x.abs() < 1e-9));
+                }
+                assert!((alpha - 0.25 - (tr - tr_new)).abs() < 1e-9);
+            }
+        }
+        assert!(
+            inside > 500 && sheared > 500 && apex > 500,
+            "{inside} {sheared} {apex}"
+        );
+    }
+
+    /// A larger friction angle holds more shear: the set of strains inside the cone grows
+    /// with φ.
+    #[test]
+    fn larger_friction_angle_yields_less() {
+        let l = lame();
+        let mut r = SplitMix64::new(8);
+        let strains: Vec<DVec3> = (0..4000)
+            .map(|_| (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5) * 0.05 - 0.01)
+            .collect();
+        let elastic = |phi: f64| {
+            let dp = sand(phi, 0.0);
+            strains.iter().filter(|&&e| !dp.project(e, &l).1).count()
+        };
+        let counts: Vec<usize> = [10.0, 20.0, 30.0, 40.0].map(elastic).to_vec();
+        assert!(counts.windows(2).all(|w| w[0] < w[1]), "{counts:?}");
+    }
+}

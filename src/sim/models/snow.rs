@@ -131,3 +131,62 @@ impl PlasticLaw for Snow {
         ]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use glam::DQuat;
+
+    fn snow() -> Snow {
+        Snow {
+            critical_compression: 0.025,
+            critical_stretch: 0.0075,
+            hardening: 10.0,
+        }
+    }
+
+    /// The returned singular values lie in [1 − θ_c, 1 + θ_s], equal the trial ones there
+    /// (F unchanged), and the total volume is kept: J_E·Jᴾ before and after agree, i.e. α
+    /// = ln Jᴾ gains exactly ln(J_trial/J_new).
+    #[test]
+    fn clamp_keeps_the_total_volume() {
+        let s = snow();
+        let l = Lame::from_young_poisson(1.4e5, 0.2);
+        let mut r = SplitMix64::new(3);
+        let (mut inside, mut clamped) = (0, 0);
+        for _ in 0..4000 {
+            let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
+            let q =
+                DMat3::from_quat(DQuat::from_xyzw(v.x, v.y, v.z, r.uniform() - 0.5).normalize());
+            let sigma = DVec3::new(r.uniform(), r.uniform(), r.uniform()) * 0.06 + 0.97;
+            let f = q * DMat3::from_diagonal(sigma);
+            let alpha = -0.1 * r.uniform();
+            let (f_new, alpha_new) = s.return_map(f, alpha, &l);
+            let sv = svd3(f_new).sigma;
+            assert!(sv.min_element() >= 1.0 - 0.025 - 1e-12 && sv.max_element() <= 1.0075 + 1e-12);
+            let total = |f: DMat3, a: f64| f.determinant().ln() + a;
+            assert!((total(f_new, alpha_new) - total(f, alpha)).abs() < 1e-12);
+            if sigma.cmpge(DVec3::splat(0.975)).all() && sigma.cmple(DVec3::splat(1.0075)).all() {
+                inside += 1;
+                assert_eq!((f_new, alpha_new), (f, alpha));
+            } else {
+                clamped += 1;
+            }
+        }
+        assert!(inside > 200 && clamped > 200, "{inside} {clamped}");
+    }
+
+    /// Compacted snow (Jᴾ < 1) stiffens by e^{ξ(1 − Jᴾ)}, loosened snow softens; fresh snow
+    /// has its own Lamé parameters.
+    #[test]
+    fn hardening_factor() {
+        let s = snow();
+        assert_eq!(s.stress_scale(0.0), 1.0);
+        let jp: f64 = 0.9;
+        assert!((s.stress_scale(jp.ln()) - 1.0f64.exp()).abs() < 1e-12);
+        assert!(s.stress_scale(0.1) < 1.0);
+        // Total loss of volume leaves a finite factor.
+        assert!(s.stress_scale(-1e3).is_finite());
+    }
+}

@@ -118,3 +118,101 @@ impl PlasticLaw for VonMises {
         ]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    fn lame() -> Lame {
+        Lame::from_young_poisson(1e6, 0.3)
+    }
+
+    fn q_of(eps: DVec3, l: &Lame) -> f64 {
+        let dev = eps - DVec3::splat((eps.x + eps.y + eps.z) / 3.0);
+        2.0 * l.mu * 1.5f64.sqrt() * dev.length()
+    }
+
+    /// Below the yield surface nothing changes; above it the return lands on the hardened
+    /// surface q = σ_y + H (α + Δε̄ᴾ), keeps the volume (tr ε) and the direction of ε̂,
+    /// and Δε̄ᴾ = (q_trial − σ_y(α))/(3μ + H) (the consistency condition of linear
+    /// hardening).
+    #[test]
+    fn radial_return_is_consistent() {
+        let l = lame();
+        let mut r = SplitMix64::new(11);
+        let vm = VonMises {
+            yield_stress: 5e3,
+            hardening: 2e5,
+        };
+        let (mut elastic, mut plastic) = (0, 0);
+        for _ in 0..4000 {
+            let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5) * 0.02;
+            let alpha = r.uniform() * 0.01;
+            let (eps_new, d_eq) = vm.project(eps, alpha, &l);
+            let q_trial = q_of(eps, &l);
+            if q_trial <= vm.yield_stress_at(alpha) {
+                elastic += 1;
+                assert_eq!((eps_new, d_eq), (eps, 0.0));
+                continue;
+            }
+            plastic += 1;
+            let want = (q_trial - vm.yield_stress_at(alpha)) / (3.0 * l.mu + vm.hardening);
+            assert!((d_eq - want).abs() < 1e-12);
+            let q = q_of(eps_new, &l);
+            assert!(
+                (q - vm.yield_stress_at(alpha + d_eq)).abs() < 1e-6 * q,
+                "{q}"
+            );
+            let tr = |e: DVec3| e.x + e.y + e.z;
+            assert!((tr(eps_new) - tr(eps)).abs() < 1e-14);
+            let dir = |e: DVec3| {
+                let d = e - DVec3::splat(tr(e) / 3.0);
+                d / d.length()
+            };
+            assert!((dir(eps_new) - dir(eps)).length() < 1e-9);
+        }
+        assert!(elastic > 500 && plastic > 500, "{elastic} {plastic}");
+    }
+
+    /// Uniaxial tension in the oracle: a bar stretched by λ₁ with the lateral strains that
+    /// keep the lateral stress 0 (solved by bisection) yields when the axial stress reaches
+    /// σ_y, and beyond it the axial stress follows σ_y + H ε̄ᴾ with ε̄ᴾ the axial plastic
+    /// strain (ε̄ᴾ = |Δε_axial| in uniaxial plastic flow).
+    #[test]
+    fn uniaxial_tension_yields_at_the_yield_stress() {
+        let l = lame();
+        let vm = VonMises {
+            yield_stress: 5e3,
+            hardening: 0.0,
+        };
+        // Axial stress at axial strain e with lateral strain t (elastic trial).
+        let stress = |e: f64, t: f64| {
+            let eps = DVec3::new(e, t, t);
+            let (eps_new, _) = vm.project(eps, 0.0, &l);
+            let tr = eps_new.x + eps_new.y + eps_new.z;
+            let tau = eps_new * (2.0 * l.mu) + DVec3::splat(l.lambda * tr);
+            (tau.x, tau.y)
+        };
+        let lateral_free = |e: f64| {
+            let (mut lo, mut hi) = (-e, e);
+            for _ in 0..200 {
+                let mid = 0.5 * (lo + hi);
+                if stress(e, mid).1 > 0.0 {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            stress(e, 0.5 * (lo + hi)).0
+        };
+        let e_young = 1e6;
+        // Elastic: σ = E ε below ε_y = σ_y / E; flat at σ_y above (perfect plasticity).
+        let below = lateral_free(0.5 * 5e3 / e_young);
+        assert!((below - 2.5e3).abs() < 1e-6 * 2.5e3, "{below}");
+        for e in [2.0, 5.0, 20.0] {
+            let above = lateral_free(e * 5e3 / e_young);
+            assert!((above - 5e3).abs() < 1e-6 * 5e3, "ε = {e} ε_y: {above}");
+        }
+    }
+}
