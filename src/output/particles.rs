@@ -4,10 +4,11 @@
 //! `--fragments` counts ours.
 //!
 //! Format (docs/formats.md, *Particle files*): `binary_little_endian` PLY, one `vertex`
-//! per particle with `float x y z vx vy vz mass volume log_jp` and `int material object`;
-//! a header comment `dx D` gives the grid spacing, the default link distance of the
-//! fragment counter. `log_jp` is the NACC hardening state α = log Jᴾ (α ≥ 0: the
-//! particle's cohesion is gone); NaN for materials without one.
+//! per particle with `float x y z vx vy vz mass volume log_jp damage` and `int material
+//! object`; a header comment `dx D` gives the grid spacing, the default link distance of
+//! the fragment counter. `log_jp` is the hardening state α where the plastic model keeps
+//! ln Jᴾ there (NACC, Drucker–Prager, snow), NaN otherwise; `damage` is the material's
+//! damage d(α) ∈ [0, 1] (`Material::damage`, 1: the particle's cohesion is gone).
 
 use std::path::{Path, PathBuf};
 
@@ -23,7 +24,9 @@ use crate::scene::simulation::SimulationSetup;
 use crate::sim::Particles;
 
 /// The float properties of a particle record, in file order.
-const FLOATS: [&str; 9] = ["x", "y", "z", "vx", "vy", "vz", "mass", "volume", "log_jp"];
+const FLOATS: [&str; 10] = [
+    "x", "y", "z", "vx", "vy", "vz", "mass", "volume", "log_jp", "damage",
+];
 /// The integer properties, after the floats.
 const INTS: [&str; 2] = ["material", "object"];
 
@@ -53,13 +56,19 @@ pub fn encode(state: &Particles, setup: &SimulationSetup, comment: &str) -> Vec<
     bytes.reserve(state.len() * (FLOATS.len() + INTS.len()) * 4);
     for body in &setup.bodies {
         for i in body.particles.clone() {
-            let hardening = setup.materials[state.material[i] as usize].has_hardening_state();
-            let log_jp = if hardening { state.alpha[i] } else { f64::NAN };
+            let material = &setup.materials[state.material[i] as usize];
+            let alpha = state.alpha[i];
+            let log_jp = if material.plastic_model().alpha_is_log_jp() {
+                alpha
+            } else {
+                f64::NAN
+            };
             let (x, v) = (state.x[i], state.v[i]);
             for value in [x.x, x.y, x.z, v.x, v.y, v.z].into_iter().chain([
                 state.mass[i],
                 state.volume0[i],
                 log_jp,
+                material.damage(alpha),
             ]) {
                 bytes.extend_from_slice(&(value as f32).to_le_bytes());
             }
@@ -89,6 +98,8 @@ pub struct ParticleFile {
     pub x: Vec<DVec3>,
     /// α = log Jᴾ per particle, when the file has `log_jp`.
     pub log_jp: Option<Vec<f64>>,
+    /// Damage d ∈ [0, 1] per particle, when the file has `damage`.
+    pub damage: Option<Vec<f64>>,
     /// The object each particle belongs to, when the file has `object`.
     pub object: Option<Vec<i64>>,
     /// The `comment dx D` of the header.
@@ -161,6 +172,7 @@ pub fn read(path: &Path) -> Result<ParticleFile> {
     Ok(ParticleFile {
         x,
         log_jp: column("log_jp")?,
+        damage: column("damage")?,
         object,
         dx,
     })
@@ -172,7 +184,8 @@ pub struct ObjectPieces {
     /// The `object` index; `None` when the file has no `object` property.
     pub object: Option<i64>,
     pub summary: FragmentSummary,
-    /// Share of the object's particles with log Jᴾ ≥ 0, when the file has `log_jp`.
+    /// Share of the object's particles whose damage is 1 (from `damage`, or for files
+    /// without it, NACC's reading of `log_jp`: α ≥ 0).
     pub damaged_share: Option<f64>,
 }
 
@@ -195,8 +208,13 @@ impl ParticleFile {
                 let points: Vec<DVec3> = members.iter().map(|&i| self.x[i]).collect();
                 let summary =
                     FragmentSummary::new(&sizes_of(&fragment_ids(&points, link)), PIECE_SHARE);
-                let damaged_share = self.log_jp.as_ref().map(|a| {
-                    let n = members.iter().filter(|&&i| a[i] >= 0.0).count();
+                let damaged = match (&self.damage, &self.log_jp) {
+                    (Some(d), _) => Some((d, 1.0)),
+                    (None, Some(a)) => Some((a, 0.0)),
+                    (None, None) => None,
+                };
+                let damaged_share = damaged.map(|(a, at)| {
+                    let n = members.iter().filter(|&&i| a[i] >= at).count();
                     n as f64 / members.len().max(1) as f64
                 });
                 ObjectPieces {
@@ -206,5 +224,30 @@ impl ParticleFile {
                 }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The damaged share counts d = 1 from `damage`; a file without it falls back to
+    /// NACC's α ≥ 0 in `log_jp` (a von Mises α, the plastic strain, is never read as
+    /// damage: its file has `damage` 0 and `log_jp` NaN).
+    #[test]
+    fn damaged_share_reads_damage_before_log_jp() {
+        let x = vec![DVec3::ZERO; 4];
+        let mut file = ParticleFile {
+            x,
+            log_jp: Some(vec![0.5, -0.1, f64::NAN, 0.0]),
+            damage: Some(vec![1.0, 0.3, 0.0, 0.0]),
+            object: None,
+            dx: None,
+        };
+        assert_eq!(file.pieces(0.1)[0].damaged_share, Some(0.25));
+        file.damage = None;
+        assert_eq!(file.pieces(0.1)[0].damaged_share, Some(0.5));
+        file.log_jp = None;
+        assert_eq!(file.pieces(0.1)[0].damaged_share, None);
     }
 }

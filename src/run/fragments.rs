@@ -174,10 +174,7 @@ impl FragmentLog {
             let damaged = body
                 .particles
                 .clone()
-                .filter(|&i| {
-                    s.materials[state.material[i] as usize].has_hardening_state()
-                        && state.alpha[i] >= 0.0
-                })
+                .filter(|&i| s.materials[state.material[i] as usize].damage(state.alpha[i]) >= 1.0)
                 .count();
             let height = height_extent(&points);
             let motion = Motion::of(body.particles.clone(), state, s.params.gravity);

@@ -256,9 +256,56 @@ impl MaterialSpec {
     }
 }
 
+/// The scene file's plastic laws and their parameters as a markdown table, from the
+/// registry and the parameters' doc comments (the table in docs/scene-format.md).
+pub fn materials_table() -> String {
+    let mut generator = schemars::SchemaGenerator::default();
+    let mut out =
+        String::from("| `model` | elasticity | parameter | meaning |\n|---|---|---|---|\n");
+    for &law in PlasticModel::LAWS {
+        let schema = law.params_schema(&mut generator);
+        let elastic = law.elastic().map_or("", |m| m.def().name);
+        let required: Vec<&str> = schema
+            .get("required")
+            .and_then(Value::as_array)
+            .map(|r| r.iter().filter_map(Value::as_str).collect())
+            .unwrap_or_default();
+        let props = schema.get("properties").and_then(Value::as_object);
+        for (name, prop) in props.into_iter().flatten() {
+            let description = prop
+                .get("description")
+                .and_then(Value::as_str)
+                .unwrap_or("")
+                .replace('\n', " ");
+            let need = if required.contains(&name.as_str()) {
+                " (required)"
+            } else {
+                ""
+            };
+            out += &format!(
+                "| `{}` | `{elastic}` | `{name}`{need} | {description} |\n",
+                law.name()
+            );
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// docs/scene-format.md carries the registry's table of the plastic laws' parameters
+    /// as `materials_table` writes it (paste the printed table when a law changes).
+    #[test]
+    fn the_docs_table_is_the_registrys() {
+        let docs = include_str!("../../docs/scene-format.md");
+        let table = materials_table();
+        assert!(
+            docs.contains(&table),
+            "docs/scene-format.md's table of plastic laws is out of date; the registry's:\n{table}"
+        );
+    }
 
     /// Every registered name parses, and no elastic model shares a name with a law.
     #[test]

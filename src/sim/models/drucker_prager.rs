@@ -71,6 +71,7 @@ impl PlasticLaw for DruckerPrager {
     const ELASTIC: ElasticModel = ElasticModel::StvkHencky;
     const FRACTURES: bool = false;
     const ALPHA: &'static str = "log of the plastic volume ratio Jᴾ (dilation > 0)";
+    const ALPHA_IS_LOG_JP: bool = true;
     // params: α_dp, the apex's tr ε.
     const WGSL: PlasticWgsl = PlasticWgsl {
         return_map:

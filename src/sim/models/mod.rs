@@ -107,8 +107,11 @@ pub trait PlasticLaw: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static
     /// Whether α measures damage, so that the material breaks into pieces (two-field
     /// separation, `fragments.csv`'s damaged count, recomputed normals).
     const FRACTURES: bool;
-    /// What α holds, for the docs and the particle PLY.
+    /// What α holds, for the docs and the schema.
     const ALPHA: &'static str;
+    /// Whether α is ln Jᴾ, the log of the plastic volume ratio (the particle PLY's
+    /// `log_jp`).
+    const ALPHA_IS_LOG_JP: bool;
     /// Its WGSL.
     const WGSL: PlasticWgsl;
     /// The scene-file parameters besides `model`, `E`, `nu` and `density`.
@@ -248,6 +251,14 @@ macro_rules! plastic_registry {
                 match self {
                     PlasticModel::None => false,
                     $(PlasticModel::$variant => <$law>::FRACTURES,)+
+                }
+            }
+
+            /// Whether its α is ln Jᴾ ([`PlasticLaw::ALPHA_IS_LOG_JP`]).
+            pub fn alpha_is_log_jp(self) -> bool {
+                match self {
+                    PlasticModel::None => false,
+                    $(PlasticModel::$variant => <$law>::ALPHA_IS_LOG_JP,)+
                 }
             }
 

@@ -57,6 +57,7 @@ impl PlasticLaw for Nacc {
     const FRACTURES: bool = true;
     const ALPHA: &'static str =
         "the hardening state, log of the plastic volume ratio Jᴾ (starts at α₀)";
+    const ALPHA_IS_LOG_JP: bool = true;
     // params: β, ξ, M, k, variant (bits), α₀.
     const WGSL: PlasticWgsl = PlasticWgsl {
         return_map: "let r = nacc_return_map(f, alpha, nacc_material(m)); return PlasticState(r.f, r.alpha);",

@@ -59,6 +59,7 @@ impl PlasticLaw for Snow {
     const ELASTIC: ElasticModel = ElasticModel::FixedCorotated;
     const FRACTURES: bool = false;
     const ALPHA: &'static str = "log of the plastic volume ratio Jᴾ (compacted < 0)";
+    const ALPHA_IS_LOG_JP: bool = true;
     // params: θ_c, θ_s, ξ.
     const WGSL: PlasticWgsl = PlasticWgsl {
         return_map: "return snow_return_map(f, alpha, m.params[0], m.params[1]);",

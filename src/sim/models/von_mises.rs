@@ -61,6 +61,7 @@ impl PlasticLaw for VonMises {
     const ELASTIC: ElasticModel = ElasticModel::StvkHencky;
     const FRACTURES: bool = false;
     const ALPHA: &'static str = "the equivalent plastic strain ε̄ᴾ";
+    const ALPHA_IS_LOG_JP: bool = false;
     // params: σ_y, H.
     const WGSL: PlasticWgsl = PlasticWgsl {
         return_map: "return von_mises_return_map(f, alpha, m.mu, m.params[0], m.params[1]);",
