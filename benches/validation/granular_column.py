@@ -29,7 +29,9 @@ Usage: python3 benches/validation/granular_column.py OUT_DIR [CASE ...]
   runout cases at a = 0.5 and 2 (phi 30) and pile cases at phi 20, 30, 40 (a = 1).
   Writes OUT_DIR/NAME.json, runs target/release/splatter render on it (64x64 pictures,
   particles to OUT_DIR/NAME/particles/), and prints a table; OUT_DIR/results.json holds
-  the numbers. Environment: SPLATTER (the binary), DX (grid spacing, default 0.01 m).
+  the numbers. Environment: SPLATTER (the binary), DX (grid spacing, default 0.01 m; the
+  column is always MIN_CELLS = 20 cells across, so DX sets its size in metres, not the
+  resolution).
 Needs numpy.
 """
 import json
