@@ -79,6 +79,9 @@ pub struct PressSample {
     /// material meets the plate at the first node at or above it (as it meets the floor at
     /// the floor's band's last node); what mass conservation gives for ρ/ρ₀.
     pub confined_ratio: f64,
+    /// The same from the particles: the rest distance between the mean heights of the
+    /// top and bottom lattice layers over the current one.
+    pub layer_ratio: f64,
     /// Mean and largest 1/Jᴾ.
     pub plastic_mean: f64,
     pub plastic_max: f64,
@@ -115,6 +118,16 @@ pub fn run(spec: &PressSpec) -> PressResult {
     );
     let mat = Material::plastic(spec.law, spec.e, spec.nu);
     let materials = [mat];
+    let z_rest: Vec<f64> = p.x.iter().map(|x| x.z).collect();
+    let (z_min, z_max) = z_rest
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &z| (a.min(z), b.max(z)));
+    let half = 0.25 * dx / f64::from(spec.ppc_axis);
+    let bottom: Vec<usize> = (0..p.len()).filter(|&q| z_rest[q] < z_min + half).collect();
+    let top: Vec<usize> = (0..p.len()).filter(|&q| z_rest[q] > z_max - half).collect();
+    let mean_z = |p: &Particles, idx: &[usize]| {
+        idx.iter().map(|&q| p.x[q].z).sum::<f64>() / idx.len() as f64
+    };
     let mut params = StepParams {
         dt: 0.0,
         gravity: DVec3::ZERO,
@@ -197,6 +210,7 @@ pub fn run(spec: &PressSpec) -> PressResult {
                 compression: 1.0 - height / spec.size,
                 density_ratio: v0 / v,
                 confined_ratio: spec.size / (plate_node(top0 - travel(t)) - lo_m),
+                layer_ratio: (z_max - z_min) / (mean_z(&p, &top) - mean_z(&p, &bottom)),
                 plastic_mean: inv_jp / p.len() as f64,
                 plastic_max: max_inv,
                 pressure: -tzz / (area * height),
