@@ -18,9 +18,7 @@ use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
 use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{
-    Binds, GridTexture, Passes, Scatter, StepBuffers, StepPass, GRID_TEXELS_PER_ROW,
-};
+use super::step::{Binds, GridTexture, Passes, Scatter, StepBuffers, GRID_TEXELS_PER_ROW};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
@@ -467,7 +465,7 @@ impl GpuSim {
     }
 
     /// Record one step: its clears, then `passes` in one compute pass.
-    fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[StepPass]) {
+    fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[usize]) {
         self.passes.clear(enc, &self.buffers);
         let sizes = (self.num_particles, self.num_blocks);
         let list = self
@@ -488,7 +486,7 @@ impl GpuSim {
         // The passes of a step after the first of a submission, after one untimed prepare.
         let passes = self.passes.list(self.num_particles, false);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.record(&mut enc, &[StepPass::Prepare]);
+        self.record(&mut enc, &self.passes.prepare_only());
         gpu.queue.submit([enc.finish()]);
         let sizes = (self.num_particles, self.num_blocks);
         let list = self

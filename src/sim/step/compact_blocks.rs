@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
 
 pub(crate) struct CompactBlocks {
     kernel: Kernel,
@@ -17,7 +17,7 @@ impl CompactBlocks {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
+    fn bind_group(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
         self.kernel.bind_named(
             device,
             &[
@@ -30,9 +30,20 @@ impl CompactBlocks {
             ],
         )
     }
+}
+
+impl StepPass for CompactBlocks {
+    fn name(&self) -> &'static str {
+        "compact blocks"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b))
+    }
 
     /// One invocation per block of the domain.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, blocks: u32) {
-        self.kernel.dispatch(c, bind, blocks.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch(c, bound.whole(), at.blocks.div_ceil(256));
     }
 }

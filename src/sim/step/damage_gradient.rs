@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
 
 pub(crate) struct DamageGradient {
     kernel: Kernel,
@@ -17,7 +17,7 @@ impl DamageGradient {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
+    fn bind_group(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
         use wgpu::BindingResource::Buffer;
         self.kernel.bind_named_resources(
             device,
@@ -31,9 +31,20 @@ impl DamageGradient {
             ],
         )
     }
+}
+
+impl StepPass for DamageGradient {
+    fn name(&self) -> &'static str {
+        "damage gradient"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b))
+    }
 
     /// One invocation per particle.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        self.kernel.dispatch(c, bind, particles.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch(c, bound.whole(), at.particles.div_ceil(256));
     }
 }

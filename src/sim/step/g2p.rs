@@ -4,7 +4,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers, MAT3, SCALAR, VEC4};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
 pub(crate) struct G2p {
     kernel: Kernel,
@@ -25,7 +25,7 @@ impl G2p {
     }
 
     /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+    fn bind_page(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
         use wgpu::BindingResource::Buffer;
         self.kernel.bind_named_resources(
             device,
@@ -54,9 +54,21 @@ impl G2p {
             ],
         )
     }
+}
+
+impl StepPass for G2p {
+    fn name(&self) -> &'static str {
+        "g2p"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    }
 
     /// One invocation per particle of the page.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        self.kernel.dispatch(c, bind, particles.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        for (bind, n) in bound.pages(at) {
+            self.kernel.dispatch(c, bind, n.div_ceil(256));
+        }
     }
 }

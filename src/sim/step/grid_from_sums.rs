@@ -4,7 +4,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
 
 pub(crate) struct GridFromSums {
     kernel: Kernel,
@@ -22,7 +22,7 @@ impl GridFromSums {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
+    fn bind_group(&self, device: &wgpu::Device, b: &StepBuffers) -> wgpu::BindGroup {
         self.kernel.bind_named_resources(
             device,
             &[
@@ -37,9 +37,20 @@ impl GridFromSums {
             ],
         )
     }
+}
+
+impl StepPass for GridFromSums {
+    fn name(&self) -> &'static str {
+        "grid from sums"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b))
+    }
 
     /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, b: &StepBuffers) {
-        self.kernel.dispatch_indirect(c, bind, &b.block_args, 0);
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch_indirect(c, bound.whole(), &at.b.block_args, 0);
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, Sorted, StepBuffers};
+use super::{step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers, StepPass};
 
 pub(crate) struct MarkBlocks {
     kernel: Kernel,
@@ -17,7 +17,12 @@ impl MarkBlocks {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        b: &StepBuffers,
+        sorted: &Sorted,
+    ) -> wgpu::BindGroup {
         self.kernel.bind_named(
             device,
             &[
@@ -27,9 +32,20 @@ impl MarkBlocks {
             ],
         )
     }
+}
+
+impl StepPass for MarkBlocks {
+    fn name(&self) -> &'static str {
+        "mark blocks"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b, at.sorted()))
+    }
 
     /// One invocation per particle.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        self.kernel.dispatch(c, bind, particles.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch(c, bound.whole(), at.particles.div_ceil(256));
     }
 }

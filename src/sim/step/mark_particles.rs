@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers, VEC4};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, VEC4};
 
 pub(crate) struct MarkParticles {
     kernel: Kernel,
@@ -18,7 +18,7 @@ impl MarkParticles {
     }
 
     /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+    fn bind_page(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
         self.kernel.bind_named_parts(
             device,
             &[
@@ -29,9 +29,21 @@ impl MarkParticles {
             ],
         )
     }
+}
+
+impl StepPass for MarkParticles {
+    fn name(&self) -> &'static str {
+        "mark blocks (particles)"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    }
 
     /// One invocation per particle of the page.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        self.kernel.dispatch(c, bind, particles.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        for (bind, n) in bound.pages(at) {
+            self.kernel.dispatch(c, bind, n.div_ceil(256));
+        }
     }
 }

@@ -4,9 +4,9 @@
 //!
 //! 1. [`Prepare`] — per particle: base-cell sort key and the affine term
 //!    m C − Δt V⁰ (4/Δx²) τ(F);
-//! 2. [`RadixSort`] — particles by base cell (only the bits the cell count needs);
-//! 3. [`Ranges`] — each cell's run of particles (the GPU primitive the renderer also uses
-//!    for its tiles);
+//! 2. [`SortCells`] — particles by base cell (only the bits the cell count needs);
+//! 3. [`CellRanges`] — each cell's run of particles (the GPU primitive the renderer also
+//!    uses for its tiles);
 //! 4. [`MarkBlocks`], [`CompactBlocks`] — the blocks of 4³ nodes an occupied cell's
 //!    stencils reach, listed with a pool slot each (the node passes run only there);
 //! 5. with two-field separation (docs/method.md §4.9) [`DamageField`], [`DamageGradient`]
@@ -26,9 +26,15 @@
 //! (deterministic, every adapter) — and [`GridFromSums`] (the grid update on the active
 //! blocks), and only the first step of a submission runs [`Prepare`]: that path's G2P
 //! leaves the next step's affine term, so later steps need not re-read F, C and the
-//! material for it. [`Passes::list`] is that algorithm; [`Passes::stages`] records it through the
-//! same named stages the renderer uses (`gpu::stages`).
+//! material for it.
+//!
+//! Each pass is a [`StepPass`] (`pass.rs`): its name, its bind groups over [`StepBuffers`]
+//! and its dispatches. [`Passes::new`] lists a path's passes in this order, and
+//! [`Passes::stages`] records them through the same named stages the renderer uses
+//! (`gpu::stages`). A new pass is its file, its `mod` and `use` lines and its line in
+//! [`Passes::new`].
 
+mod cell_ranges;
 mod compact_blocks;
 mod damage_field;
 mod damage_gradient;
@@ -40,9 +46,12 @@ mod mark_particles;
 mod p2g;
 mod p2g_fixed;
 mod p2g_scatter;
+mod pass;
 mod prepare;
 mod ridge;
+mod sort_cells;
 
+pub(crate) use cell_ranges::CellRanges;
 pub(crate) use compact_blocks::CompactBlocks;
 pub(crate) use damage_field::DamageField;
 pub(crate) use damage_gradient::DamageGradient;
@@ -53,13 +62,13 @@ pub(crate) use mark_particles::MarkParticles;
 pub(crate) use p2g::P2gGather;
 pub(crate) use p2g_fixed::P2gFixed;
 pub(crate) use p2g_scatter::P2gScatter;
+pub(crate) use pass::{BindAt, Bound, Extent, StepPass};
 pub(crate) use prepare::Prepare;
 pub(crate) use ridge::Ridge;
+pub(crate) use sort_cells::SortCells;
 
 use crate::gpu::pages::PageRanges;
-use crate::gpu::ranges::Ranges;
-use crate::gpu::scan::Scan;
-use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+use crate::gpu::sort::SortPlan;
 use crate::gpu::stages::Stage;
 use crate::gpu::{Executor, Kernel};
 
@@ -225,31 +234,28 @@ pub(crate) struct Sorted<'a> {
     pub values: &'a wgpu::Buffer,
 }
 
-/// The pipelines of the step; a scatter path's only when the step scatters.
+impl<'a> Sorted<'a> {
+    /// Where `plan`'s sort of `b`'s cell keys leaves them.
+    fn after(b: &'a StepBuffers, plan: &SortPlan) -> Sorted<'a> {
+        if plan.result_in_alternates() {
+            Sorted {
+                keys: &b.keys_alt,
+                values: &b.values_alt,
+            }
+        } else {
+            Sorted {
+                keys: &b.keys,
+                values: &b.values,
+            }
+        }
+    }
+}
+
+/// The passes of one path of the step, in the order a step runs them.
 pub(crate) struct Passes {
-    prepare: Prepare,
-    sort: RadixSort,
-    scan: Scan,
-    ranges: Ranges,
-    mark_blocks: MarkBlocks,
-    compact_blocks: CompactBlocks,
-    gather: P2gGather,
-    g2p: G2p,
-    atomic: Option<AtomicPasses>,
-    separation: Option<SeparationPasses>,
-}
-
-/// Two-field separation's passes (gather path only).
-struct SeparationPasses {
-    damage_field: DamageField,
-    damage_gradient: DamageGradient,
-    ridge: Ridge,
-}
-
-struct AtomicPasses {
-    mark: MarkParticles,
-    scatter: ScatterPass,
-    grid: GridFromSums,
+    passes: Vec<Box<dyn StepPass>>,
+    /// The scatter path's (its grid is the sums, cleared each step), else the gather's.
+    scatter: bool,
 }
 
 /// How a scatter path's particles add to their nodes.
@@ -261,106 +267,20 @@ pub(crate) enum Scatter {
     Fixed,
 }
 
-enum ScatterPass {
-    Float(P2gScatter),
-    Fixed(P2gFixed),
-}
-
-impl ScatterPass {
-    fn new(device: &wgpu::Device, scatter: Scatter) -> Self {
-        match scatter {
-            Scatter::Float => ScatterPass::Float(P2gScatter::new(device)),
-            Scatter::Fixed => ScatterPass::Fixed(P2gFixed::new(device)),
-        }
-    }
-
-    fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
-        match self {
-            ScatterPass::Float(p) => p.bind(device, b, i),
-            ScatterPass::Fixed(p) => p.bind(device, b, i),
-        }
-    }
-
-    fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        match self {
-            ScatterPass::Float(p) => p.record(c, bind, particles),
-            ScatterPass::Fixed(p) => p.record(c, bind, particles),
-        }
-    }
-}
-
-/// The bind groups of [`Passes`] over one set of [`StepBuffers`]; the per-particle passes
-/// have one per page of the particles.
+/// The bind groups of [`Passes`] over one set of [`StepBuffers`], a [`Bound`] per pass.
 pub(crate) struct Binds {
-    prepare: Vec<wgpu::BindGroup>,
-    compact_blocks: wgpu::BindGroup,
-    g2p: Vec<wgpu::BindGroup>,
+    bound: Vec<Bound>,
     /// Particles of each page.
     page_counts: Vec<u32>,
-    /// The path's own passes: one of the two.
-    gather: Option<GatherBinds>,
-    atomic: Option<AtomicBinds>,
 }
 
-/// The gather path's passes, which bind all particles whole (one page).
-struct GatherBinds {
-    sort: SortPlan,
-    ranges: wgpu::BindGroup,
-    mark_blocks: wgpu::BindGroup,
-    gather: wgpu::BindGroup,
-    /// Two-field separation's: damage field, damage gradient, ridge.
-    separation: Option<[wgpu::BindGroup; 3]>,
-}
-
-struct AtomicBinds {
-    mark: Vec<wgpu::BindGroup>,
-    scatter: Vec<wgpu::BindGroup>,
-    grid: wgpu::BindGroup,
-}
-
-/// One pass of the step, for recording and per-pass timing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum StepPass {
-    Clear,
-    Prepare,
-    MarkParticles,
-    Scatter,
-    GridFromSums,
-    Sort,
-    Ranges,
-    MarkBlocks,
-    CompactBlocks,
-    DamageField,
-    DamageGradient,
-    Ridge,
-    Gather,
-    G2p,
-}
-
-impl StepPass {
-    pub fn name(self) -> &'static str {
-        match self {
-            StepPass::Clear => "clear",
-            StepPass::Prepare => "prepare",
-            StepPass::MarkParticles => "mark blocks (particles)",
-            StepPass::Scatter => "p2g scatter",
-            StepPass::GridFromSums => "grid from sums",
-            StepPass::Sort => "sort",
-            StepPass::Ranges => "cell ranges",
-            StepPass::MarkBlocks => "mark blocks",
-            StepPass::CompactBlocks => "compact blocks",
-            StepPass::DamageField => "damage field",
-            StepPass::DamageGradient => "damage gradient",
-            StepPass::Ridge => "ridge",
-            StepPass::Gather => "p2g gather + grid",
-            StepPass::G2p => "g2p",
-        }
-    }
-}
+/// Which passes of [`Passes`] a step records, by position.
+pub(crate) type PassList = Vec<usize>;
 
 impl Passes {
     /// Compile the passes; a scatter path's with `scatter` (else the gather path's),
-    /// two-field separation's with `separation` (on the gather path).
+    /// two-field separation's with `separation` (on the gather path). This is the
+    /// algorithm of the module's documentation; a new pass goes in here.
     pub fn new(
         device: &wgpu::Device,
         executor: Executor,
@@ -368,237 +288,115 @@ impl Passes {
         separation: bool,
     ) -> Passes {
         let atomic = scatter.is_some();
+        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, atomic))];
+        match scatter {
+            Some(scatter) => {
+                passes.push(Box::new(MarkParticles::new(device)));
+                passes.push(Box::new(CompactBlocks::new(device)));
+                passes.push(match scatter {
+                    Scatter::Float => Box::new(P2gScatter::new(device)),
+                    Scatter::Fixed => Box::new(P2gFixed::new(device)),
+                });
+                passes.push(Box::new(GridFromSums::new(
+                    device,
+                    scatter == Scatter::Fixed,
+                )));
+            }
+            None => {
+                passes.push(Box::new(SortCells::new(device, executor)));
+                passes.push(Box::new(CellRanges::new(device)));
+                passes.push(Box::new(MarkBlocks::new(device)));
+                passes.push(Box::new(CompactBlocks::new(device)));
+                if separation {
+                    passes.push(Box::new(DamageField::new(device)));
+                    passes.push(Box::new(DamageGradient::new(device)));
+                    passes.push(Box::new(Ridge::new(device)));
+                }
+                passes.push(Box::new(P2gGather::new(device, separation)));
+            }
+        }
+        passes.push(Box::new(G2p::new(device, atomic, separation)));
         Passes {
-            prepare: Prepare::new(device),
-            sort: RadixSort::new(device, executor),
-            scan: Scan::new(device),
-            ranges: Ranges::new(device),
-            mark_blocks: MarkBlocks::new(device),
-            compact_blocks: CompactBlocks::new(device),
-            gather: P2gGather::new(device, separation),
-            g2p: G2p::new(device, atomic, separation),
-            atomic: scatter.map(|scatter| AtomicPasses {
-                mark: MarkParticles::new(device),
-                scatter: ScatterPass::new(device, scatter),
-                grid: GridFromSums::new(device, scatter == Scatter::Fixed),
-            }),
-            separation: (separation && !atomic).then(|| SeparationPasses {
-                damage_field: DamageField::new(device),
-                damage_gradient: DamageGradient::new(device),
-                ridge: Ridge::new(device),
-            }),
+            passes,
+            scatter: atomic,
         }
     }
 
-    /// Bind every pass of the path to `b`, for `n` particles sorted (on the gather path) by
-    /// keys of `sort_bits` bits.
+    /// Bind every pass to `b`, in step order (a pass after the sort finds the sorted
+    /// pairs), for `n` particles sorted (on the gather path) by keys of `sort_bits` bits.
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, n: u32, sort_bits: u32) -> Binds {
-        let pages = 0..b.pages.pages.count;
-        let per_page = |bind: &dyn Fn(u32) -> wgpu::BindGroup| pages.clone().map(bind).collect();
-        Binds {
-            prepare: per_page(&|i| self.prepare.bind(device, b, i)),
-            compact_blocks: self.compact_blocks.bind(device, b),
-            g2p: per_page(&|i| self.g2p.bind(device, b, i)),
-            page_counts: pages.clone().map(|i| b.pages.pages.range(i).1).collect(),
-            gather: self
-                .atomic
-                .is_none()
-                .then(|| self.bind_gather(device, b, n, sort_bits)),
-            atomic: self.atomic.as_ref().map(|a| AtomicBinds {
-                mark: per_page(&|i| a.mark.bind(device, b, i)),
-                scatter: per_page(&|i| a.scatter.bind(device, b, i)),
-                grid: a.grid.bind(device, b),
-            }),
-        }
-    }
-
-    fn bind_gather(
-        &self,
-        device: &wgpu::Device,
-        b: &StepBuffers,
-        n: u32,
-        sort_bits: u32,
-    ) -> GatherBinds {
-        let sort = self.sort.plan(
-            device,
-            &self.scan,
-            &SortBuffers {
-                count: &b.key_count,
-                keys: &b.keys,
-                values: &b.values,
-                keys_alt: &b.keys_alt,
-                values_alt: &b.values_alt,
-            },
-            n.max(1),
+        let mut at = BindAt {
+            b,
+            sorted: None,
+            particles: n,
             sort_bits,
-        );
-        let sorted = if sort.result_in_alternates() {
-            Sorted {
-                keys: &b.keys_alt,
-                values: &b.values_alt,
-            }
-        } else {
-            Sorted {
-                keys: &b.keys,
-                values: &b.values,
-            }
         };
-        GatherBinds {
-            ranges: self
-                .ranges
-                .kernel
-                .bind(device, &[&b.key_count, sorted.keys, &b.ranges]),
-            mark_blocks: self.mark_blocks.bind(device, b, &sorted),
-            gather: self.gather.bind(device, b, &sorted),
-            separation: self.separation.as_ref().map(|s| {
-                [
-                    s.damage_field.bind(device, b, &sorted),
-                    s.damage_gradient.bind(device, b),
-                    s.ridge.bind(device, b, &sorted),
-                ]
-            }),
-            sort,
+        let mut bound = Vec::with_capacity(self.passes.len());
+        for pass in &self.passes {
+            let binds = pass.bind(device, &at);
+            if let Bound::Sort(plan) = &binds {
+                at.sorted = Some(Sorted::after(b, plan));
+            }
+            bound.push(binds);
+        }
+        Binds {
+            bound,
+            page_counts: (0..b.pages.pages.count)
+                .map(|i| b.pages.pages.range(i).1)
+                .collect(),
         }
     }
 
-    /// The passes of one step, in order; `first`: the first step of a submission. The
-    /// atomic path runs [`Prepare`] only then: its G2P leaves the next step's affine term.
-    pub fn list(&self, particles: u32, first: bool) -> Vec<StepPass> {
-        use StepPass::*;
-        let mut list = vec![Clear];
+    /// The passes of one step, in order; `first`: the first step of a submission.
+    pub fn list(&self, particles: u32, first: bool) -> PassList {
         if particles == 0 {
             // Nothing reaches the grid, and there is nothing to move.
-            return list;
+            return Vec::new();
         }
-        if first || self.atomic.is_none() {
-            list.push(Prepare);
-        }
-        match &self.atomic {
-            Some(_) => list.extend([MarkParticles, CompactBlocks, Scatter, GridFromSums]),
-            None => {
-                list.extend([Sort, Ranges, MarkBlocks, CompactBlocks]);
-                if self.separation.is_some() {
-                    list.extend([DamageField, DamageGradient, Ridge]);
-                }
-                list.push(Gather);
-            }
-        }
-        list.push(G2p);
-        list
+        (0..self.passes.len())
+            .filter(|&i| self.passes[i].runs(first))
+            .collect()
+    }
+
+    /// [`Prepare`] alone (the first pass): the affine term a scatter path's later steps
+    /// read from the step before.
+    pub fn prepare_only(&self) -> PassList {
+        vec![0]
     }
 
     /// The buffer clears a step starts with (outside any compute pass).
     pub fn clear(&self, enc: &mut wgpu::CommandEncoder, b: &StepBuffers) {
-        match &self.atomic {
-            Some(_) => enc.clear_buffer(&b.grid, 0, None),
-            None => enc.clear_buffer(&b.ranges, 0, None),
+        if self.scatter {
+            enc.clear_buffer(&b.grid, 0, None);
+        } else {
+            enc.clear_buffer(&b.ranges, 0, None);
         }
         enc.clear_buffer(&b.block_args, 0, None);
     }
 
     /// The dispatches of `passes` as named stages, for `particles` particles on a domain
-    /// of `blocks` blocks (`StepPass::Clear` is [`Passes::clear`], not a stage).
+    /// of `blocks` blocks.
     pub fn stages<'a>(
         &'a self,
         binds: &'a Binds,
         b: &'a StepBuffers,
-        passes: &[StepPass],
+        passes: &[usize],
         (particles, blocks): (u32, u32),
     ) -> Vec<Stage<'a>> {
         passes
             .iter()
-            .filter(|p| **p != StepPass::Clear)
-            .map(|&pass| {
-                Stage::new(pass.name(), move |c: &mut wgpu::ComputePass| match pass {
-                    StepPass::Clear => {}
-                    StepPass::Prepare => {
-                        for (bind, n) in binds.pages(&binds.prepare) {
-                            self.prepare.record(c, bind, n);
-                        }
-                    }
-                    StepPass::MarkParticles => {
-                        let (a, ab) = self.atomic_passes(binds);
-                        for (bind, n) in binds.pages(&ab.mark) {
-                            a.mark.record(c, bind, n);
-                        }
-                    }
-                    StepPass::Scatter => {
-                        let (a, ab) = self.atomic_passes(binds);
-                        for (bind, n) in binds.pages(&ab.scatter) {
-                            a.scatter.record(c, bind, n);
-                        }
-                    }
-                    StepPass::GridFromSums => {
-                        let (a, ab) = self.atomic_passes(binds);
-                        a.grid.record(c, &ab.grid, b);
-                    }
-                    StepPass::Sort => self.sort.record(c, &self.scan, &gather_binds(binds).sort),
-                    StepPass::Ranges => self.ranges.kernel.dispatch(
-                        c,
-                        &gather_binds(binds).ranges,
-                        particles.div_ceil(256),
-                    ),
-                    StepPass::MarkBlocks => {
-                        self.mark_blocks
-                            .record(c, &gather_binds(binds).mark_blocks, particles)
-                    }
-                    StepPass::CompactBlocks => {
-                        self.compact_blocks.record(c, &binds.compact_blocks, blocks)
-                    }
-                    StepPass::DamageField => {
-                        let (s, sb) = self.separation_passes(binds);
-                        s.damage_field.record(c, &sb[0], b);
-                    }
-                    StepPass::DamageGradient => {
-                        let (s, sb) = self.separation_passes(binds);
-                        s.damage_gradient.record(c, &sb[1], particles);
-                    }
-                    StepPass::Ridge => {
-                        let (s, sb) = self.separation_passes(binds);
-                        s.ridge.record(c, &sb[2], b);
-                    }
-                    StepPass::Gather => self.gather.record(c, &gather_binds(binds).gather, b),
-                    StepPass::G2p => {
-                        for (bind, n) in binds.pages(&binds.g2p) {
-                            self.g2p.record(c, bind, n);
-                        }
-                    }
+            .map(|&i| {
+                let pass = &self.passes[i];
+                Stage::new(pass.name(), move |c: &mut wgpu::ComputePass| {
+                    let at = Extent {
+                        b,
+                        particles,
+                        blocks,
+                        page_counts: &binds.page_counts,
+                    };
+                    pass.record(c, &binds.bound[i], &at);
                 })
             })
             .collect()
-    }
-
-    fn separation_passes<'a>(
-        &'a self,
-        binds: &'a Binds,
-    ) -> (&'a SeparationPasses, &'a [wgpu::BindGroup; 3]) {
-        match (&self.separation, &gather_binds(binds).separation) {
-            (Some(s), Some(b)) => (s, b),
-            _ => unreachable!("separation pass recorded without separation"),
-        }
-    }
-
-    fn atomic_passes<'a>(&'a self, binds: &'a Binds) -> (&'a AtomicPasses, &'a AtomicBinds) {
-        match (&self.atomic, &binds.atomic) {
-            (Some(a), Some(b)) => (a, b),
-            _ => unreachable!("atomic pass recorded on the gather path"),
-        }
-    }
-}
-
-fn gather_binds(binds: &Binds) -> &GatherBinds {
-    binds
-        .gather
-        .as_ref()
-        .expect("gather pass recorded on the atomic path")
-}
-
-impl Binds {
-    /// Each page's bind group of a per-particle pass, with the page's particle count.
-    fn pages<'a>(
-        &'a self,
-        binds: &'a [wgpu::BindGroup],
-    ) -> impl Iterator<Item = (&'a wgpu::BindGroup, u32)> + 'a {
-        binds.iter().zip(self.page_counts.iter().copied())
     }
 }

@@ -4,7 +4,10 @@
 
 use crate::gpu::Kernel;
 
-use super::{gather_bindings, gather_source, step_kernel, Sorted, StepBuffers};
+use super::{
+    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
+    StepPass,
+};
 
 pub(crate) struct P2gGather {
     kernel: Kernel,
@@ -22,7 +25,12 @@ impl P2gGather {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        b: &StepBuffers,
+        sorted: &Sorted,
+    ) -> wgpu::BindGroup {
         let own = [
             ("x_mass", b.x_mass.as_entire_binding()),
             ("v_volume", b.v_volume.as_entire_binding()),
@@ -37,9 +45,20 @@ impl P2gGather {
         let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
         self.kernel.bind_named_resources(device, &all)
     }
+}
+
+impl StepPass for P2gGather {
+    fn name(&self) -> &'static str {
+        "p2g gather + grid"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b, at.sorted()))
+    }
 
     /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, b: &StepBuffers) {
-        self.kernel.dispatch_indirect(c, bind, &b.block_args, 0);
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch_indirect(c, bound.whole(), &at.b.block_args, 0);
     }
 }

@@ -3,22 +3,26 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, StepBuffers, MAT3, SCALAR, VEC4};
+use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
 pub(crate) struct Prepare {
     kernel: Kernel,
+    /// On the scatter path G2P leaves the next step's affine term ([`super::G2p`]), so
+    /// only the first step of a submission prepares.
+    first_step_only: bool,
 }
 
 impl Prepare {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, first_step_only: bool) -> Self {
         let src = include_str!("../../../shaders/sim/step/prepare.wgsl");
         Prepare {
             kernel: step_kernel(device, "sim prepare", src),
+            first_step_only,
         }
     }
 
     /// Bind page `i` of the particles (`gpu::pages`): windows of the particle arrays.
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
+    fn bind_page(&self, device: &wgpu::Device, b: &StepBuffers, i: u32) -> wgpu::BindGroup {
         self.kernel.bind_named_parts(
             device,
             &[
@@ -36,9 +40,25 @@ impl Prepare {
             ],
         )
     }
+}
+
+impl StepPass for Prepare {
+    fn name(&self) -> &'static str {
+        "prepare"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    }
 
     /// One invocation per particle of the page.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, particles: u32) {
-        self.kernel.dispatch(c, bind, particles.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        for (bind, n) in bound.pages(at) {
+            self.kernel.dispatch(c, bind, n.div_ceil(256));
+        }
+    }
+
+    fn runs(&self, first: bool) -> bool {
+        first || !self.first_step_only
     }
 }

@@ -3,7 +3,10 @@
 
 use crate::gpu::Kernel;
 
-use super::{gather_bindings, gather_source, step_kernel, Sorted, StepBuffers};
+use super::{
+    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
+    StepPass,
+};
 
 pub(crate) struct Ridge {
     kernel: Kernel,
@@ -17,7 +20,12 @@ impl Ridge {
         }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, sorted: &Sorted) -> wgpu::BindGroup {
+    fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        b: &StepBuffers,
+        sorted: &Sorted,
+    ) -> wgpu::BindGroup {
         let own = [
             ("damage", b.damage.as_entire_binding()),
             ("damage_gradient", b.damage_gradient.as_entire_binding()),
@@ -26,9 +34,20 @@ impl Ridge {
         let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
         self.kernel.bind_named_resources(device, &all)
     }
+}
+
+impl StepPass for Ridge {
+    fn name(&self) -> &'static str {
+        "ridge"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        Bound::Whole(self.bind_group(device, at.b, at.sorted()))
+    }
 
     /// One workgroup per active block.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, b: &StepBuffers) {
-        self.kernel.dispatch_indirect(c, bind, &b.block_args, 0);
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.kernel
+            .dispatch_indirect(c, bound.whole(), &at.b.block_args, 0);
     }
 }

@@ -1,0 +1,43 @@
+//! Each cell's run of sorted particles with the shared ranges pass (`gpu::ranges`,
+//! `shaders/gpu/ranges.wgsl`) (gather path).
+
+use crate::gpu::ranges::Ranges;
+
+use super::{BindAt, Bound, Extent, StepPass};
+
+pub(crate) struct CellRanges {
+    ranges: Ranges,
+}
+
+impl CellRanges {
+    pub fn new(device: &wgpu::Device) -> Self {
+        CellRanges {
+            ranges: Ranges::new(device),
+        }
+    }
+}
+
+impl StepPass for CellRanges {
+    fn name(&self) -> &'static str {
+        "cell ranges"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+        let b = at.b;
+        Bound::Whole(self.ranges.kernel.bind_named(
+            device,
+            &[
+                ("key_count", &b.key_count),
+                ("tile_keys", at.sorted().keys),
+                ("ranges", &b.ranges),
+            ],
+        ))
+    }
+
+    /// One invocation per sorted particle.
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
+        self.ranges
+            .kernel
+            .dispatch(c, bound.whole(), at.particles.div_ceil(256));
+    }
+}
