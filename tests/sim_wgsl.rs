@@ -1078,7 +1078,6 @@ fn nacc_p0_matches_the_oracle() {
 #[test]
 fn every_registered_model_is_reached_by_its_code() {
     use splatter::sim::gpu::GpuMaterial;
-    use splatter::sim::models::{DruckerPrager, Snow, VonMises};
     use splatter::sim::{models, ElasticModel, Material, PlasticModel};
     let mut r = SplitMix64::new(404);
     let n = 2000;
@@ -1096,37 +1095,11 @@ fn every_registered_model_is_reached_by_its_code() {
         .iter()
         .map(|&m| (Material::elastic(m, 2000.0, 0.38), 0.0))
         .collect();
-    let nacc = NaccParams {
-        e: 2000.0,
-        nu: 0.38,
-        alpha0: -0.04,
-        beta: 1.0,
-        xi: 2.0,
-        m_slope: 2.36,
-    };
-    materials.push((
-        Material::nacc(nacc, Case3Variant::Continuous { k: 2.0 }),
-        -0.04,
-    ));
-    let sand = DruckerPrager {
-        friction_angle: 35f64.to_radians(),
-        cohesion: 20.0,
-    };
-    materials.push((Material::plastic(sand, 2000.0, 0.3), 0.0));
-    let metal = VonMises {
-        yield_stress: 40.0,
-        hardening: 200.0,
-    };
-    materials.push((Material::plastic(metal, 2000.0, 0.3), 0.02));
-    let snow = Snow {
-        critical_compression: 0.025,
-        critical_stretch: 0.0075,
-        hardening: 10.0,
-    };
-    materials.push((Material::plastic(snow, 2000.0, 0.3), -0.05));
-    let laws: std::collections::HashSet<_> =
-        materials.iter().map(|(m, _)| m.plastic_model()).collect();
-    assert_eq!(laws.len(), PlasticModel::ALL.len(), "every law is tried");
+    // Every registered law at its own example material (`PlasticLaw::EXAMPLE`).
+    for &law in PlasticModel::LAWS {
+        let (plastic, alpha) = law.example(2000.0, 0.3).expect("a law has an example");
+        materials.push((Material::with_plastic(plastic, 2000.0, 0.3), alpha));
+    }
 
     let records: Vec<GpuMaterial> = materials
         .iter()

@@ -247,10 +247,7 @@ impl MaterialSpec {
                             j.to_string(),
                         ),
                     })?;
-                let mut material =
-                    Material::elastic(law.elastic().expect("a law has its elastic model"), e, nu);
-                material.plastic = plastic;
-                Ok(material)
+                Ok(Material::with_plastic(plastic, e, nu))
             }
         }
     }

@@ -53,6 +53,19 @@ impl Material {
         }
     }
 
+    /// A plastic model with its parameters, on its law's elastic model (elastic fixed
+    /// corotated for no plasticity).
+    pub fn with_plastic(plastic: Plastic, e: f64, nu: f64) -> Self {
+        Material {
+            elastic: plastic
+                .model()
+                .elastic()
+                .unwrap_or(ElasticModel::FixedCorotated),
+            lame: Lame::from_young_poisson(e, nu),
+            plastic,
+        }
+    }
+
     /// NACC (CD-MPM) with its case-3 variant.
     pub fn nacc(params: NaccParams, variant: Case3Variant) -> Self {
         Self::plastic(Nacc { params, variant }, params.e, params.nu)

@@ -7,7 +7,7 @@ use glam::{DMat3, DVec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{ElasticModel, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
+use super::{ElasticModel, Example, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
 use crate::sim::elasticity::{hencky_strain, Lame, HENCKY_SIGMA_MIN};
 use crate::sim::svd::svd3;
 
@@ -79,6 +79,10 @@ impl PlasticLaw for DruckerPrager {
         damage: "0.0",
         stress_scale: "1.0",
         module: include_str!("../../../shaders/sim/models/drucker_prager.wgsl"),
+    };
+    const EXAMPLE: Example = Example {
+        params: r#"{"friction_angle": 35.0, "cohesion": 20.0}"#,
+        alpha: 0.0,
     };
     type Spec = DruckerPragerSpec;
 

@@ -97,6 +97,15 @@ pub struct PlasticWgsl {
     pub module: &'static str,
 }
 
+/// A law's example material ([`PlasticLaw::EXAMPLE`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Example {
+    /// Its parameters (a JSON object; `E` and `nu` are the test's).
+    pub params: &'static str,
+    /// The hardening state α it is tried at.
+    pub alpha: f64,
+}
+
 /// A plastic model: the return mapping after each F update, and what it keeps in the
 /// particle's hardening state α.
 pub trait PlasticLaw: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static {
@@ -114,6 +123,10 @@ pub trait PlasticLaw: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static
     const ALPHA_IS_LOG_JP: bool;
     /// Its WGSL.
     const WGSL: PlasticWgsl;
+    /// A typical material of the law as the scene file writes it, and a hardening state
+    /// to try it at: the registry test (`tests/sim_wgsl.rs`) runs every law's GPU return
+    /// mapping against its oracle there, so a new law is tested without being listed.
+    const EXAMPLE: Example;
     /// The scene-file parameters besides `model`, `E`, `nu` and `density`.
     type Spec: serde::de::DeserializeOwned + schemars::JsonSchema;
 
@@ -283,6 +296,24 @@ macro_rules! plastic_registry {
                     $(PlasticModel::$variant => {
                         let spec = serde_json::from_value(params).map_err(ParseError::Json)?;
                         Ok(Plastic::$variant(<$law>::from_spec(spec, e, nu).map_err(ParseError::Param)?))
+                    })+
+                }
+            }
+
+            /// Its example material, parsed with Young's modulus `e` and Poisson ratio
+            /// `nu`, and the α to try it at ([`PlasticLaw::EXAMPLE`]); none for no
+            /// plasticity.
+            pub fn example(self, e: f64, nu: f64) -> Option<(Plastic, f64)> {
+                match self {
+                    PlasticModel::None => None,
+                    $(PlasticModel::$variant => {
+                        let ex = <$law as PlasticLaw>::EXAMPLE;
+                        let params = serde_json::from_str(ex.params)
+                            .unwrap_or_else(|e| panic!("{}: EXAMPLE is not JSON: {e}", <$law>::NAME));
+                        let plastic = self.parse(params, e, nu).unwrap_or_else(|err| {
+                            panic!("{}: EXAMPLE is refused: {err:?}", <$law>::NAME)
+                        });
+                        Some((plastic, ex.alpha))
                     })+
                 }
             }

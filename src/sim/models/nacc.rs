@@ -6,7 +6,7 @@ use glam::DMat3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{ElasticModel, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
+use super::{ElasticModel, Example, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
 use crate::sim::elasticity::Lame;
 use crate::sim::nacc::{
     m_from_friction_angle, return_map, Case3Variant, NaccParams, ReturnMapping,
@@ -64,6 +64,10 @@ impl PlasticLaw for Nacc {
         damage: "nacc_damage(m.params[5], alpha)",
         stress_scale: "1.0",
         module: include_str!("../../../shaders/sim/models/nacc.wgsl"),
+    };
+    const EXAMPLE: Example = Example {
+        params: r#"{"alpha0": -0.04, "beta": 1.0, "xi": 2.0, "M": 2.36, "return_mapping": "continuous", "k": 2.0}"#,
+        alpha: -0.04,
     };
     type Spec = NaccSpec;
 

@@ -7,7 +7,7 @@ use glam::{DMat3, DVec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{ElasticModel, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
+use super::{ElasticModel, Example, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
 use crate::sim::elasticity::Lame;
 use crate::sim::svd::svd3;
 
@@ -66,6 +66,10 @@ impl PlasticLaw for Snow {
         damage: "0.0",
         stress_scale: "snow_hardening(m.params[2], alpha)",
         module: include_str!("../../../shaders/sim/models/snow.wgsl"),
+    };
+    const EXAMPLE: Example = Example {
+        params: r#"{"critical_compression": 0.025, "critical_stretch": 0.0075, "hardening": 10.0}"#,
+        alpha: -0.05,
     };
     type Spec = SnowSpec;
 

@@ -8,7 +8,7 @@ use glam::{DMat3, DVec3};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::{ElasticModel, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
+use super::{ElasticModel, Example, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
 use crate::sim::elasticity::{hencky_strain, Lame, HENCKY_SIGMA_MIN};
 use crate::sim::svd::svd3;
 
@@ -68,6 +68,10 @@ impl PlasticLaw for VonMises {
         damage: "0.0",
         stress_scale: "1.0",
         module: include_str!("../../../shaders/sim/models/von_mises.wgsl"),
+    };
+    const EXAMPLE: Example = Example {
+        params: r#"{"yield_stress": 40.0, "hardening": 200.0}"#,
+        alpha: 0.02,
     };
     type Spec = VonMisesSpec;
 
