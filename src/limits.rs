@@ -100,11 +100,10 @@ pub fn sim_needs(particles: usize, cells: UVec3, gather: bool, surface: bool) ->
     let nodes = cells.to_array().map(|c| u64::from(c) + 1);
     let blocks: u64 = nodes.iter().map(|n| n.div_ceil(4)).product();
     let node_count: u64 = nodes.iter().product();
-    let cell_count: u64 = cells.to_array().iter().map(|c| u64::from(*c)).product();
     let mut needs = vec![
         Need {
             what: if gather {
-                format!("the deformation gradients of {n} particles, which the gather P2G path (two-field separation) binds whole")
+                format!("the stress-affine terms of {n} particles, which the gather P2G path (two-field separation) binds whole")
             } else {
                 format!("the deformation gradients of {n} particles")
             },
@@ -134,8 +133,11 @@ pub fn sim_needs(particles: usize, cells: UVec3, gather: bool, surface: bool) ->
     }
     if gather {
         needs.push(Need {
-            what: format!("the cell ranges of {cell_count} grid cells (gather P2G path)"),
-            bytes: (cell_count + 1) * 8,
+            what: format!(
+                "the cell ranges of {} grid cells (gather P2G path)",
+                crate::sim::gpu::gather_range_entries(cells) - 1
+            ),
+            bytes: crate::sim::gpu::gather_range_entries(cells) * 8,
             advice: SMALLER_GRID,
             fit: Fit::Binding,
         });
@@ -283,7 +285,12 @@ mod tests {
         )
         .unwrap();
         let e = check(&sim_needs(10, grid(400), true, false), binding, buffer, "x").unwrap_err();
-        assert!(e.to_string().contains("64000000 grid cells"), "{e}");
+        assert!(e.to_string().contains("63521199 grid cells"), "{e}");
+        // The gather path's ranges are per base cell: 363³ cells (362³ + 1 ranges, 379 MB
+        // in a 380 MB binding) fit exactly where 363³ + 1 would not.
+        let fits = 8 * (362u64.pow(3) + 1);
+        check(&sim_needs(10, grid(363), true, false), fits, buffer, "x").unwrap();
+        check(&sim_needs(10, grid(364), true, false), fits, buffer, "x").unwrap_err();
         assert!(e.to_string().contains("simulation.dx"), "{e}");
         let e = check(
             &sim_needs(10, grid(5000), false, false),

@@ -118,9 +118,9 @@ fn run(
             usage: storage,
         })
     });
-    let mut buffers = vec![&input, &output];
-    buffers.extend(extra.as_ref());
-    let bind = kernel.bind(dev, &buffers);
+    let mut buffers = vec![("inputs", &input), ("outputs", &output)];
+    buffers.extend(extra.as_ref().map(|b| ("materials", b)));
+    let bind = kernel.bind_named(dev, &buffers);
     let mut enc = dev.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());

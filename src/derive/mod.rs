@@ -162,9 +162,16 @@ impl Derive {
             mapped_at_creation: false,
         });
         let shading = renderer.shading_buffer().unwrap_or(&stand_in);
-        let bind = kernel.bind(
+        let bind = kernel.bind_named(
             device,
-            &[&params, x_mass, deformation, &rest, target, shading],
+            &[
+                ("params", &params),
+                ("x_mass", x_mass),
+                ("deformation", deformation),
+                ("rest", &rest),
+                ("gaussians", target),
+                ("shading", shading),
+            ],
         );
         Ok(Derive {
             kernel,

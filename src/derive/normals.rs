@@ -207,24 +207,36 @@ impl GpuNormals {
             "main",
         );
         let tile_ranges = Ranges::new(device);
-        let keys_bind = keys_kernel.bind(device, &[&params_buf, gaussians, &keys, &values]);
-        let ranges_bind = tile_ranges
-            .kernel
-            .bind(device, &[&key_count, sorted_keys, &cell_ranges]);
-        let points = storage(device, "normals points", n * 16);
-        let points_bind = points_kernel.bind(
-            device,
-            &[&params_buf, gaussians, sorted_values, &object_buf, &points],
-        );
-        let pca_bind = pca.bind(
+        let keys_bind = keys_kernel.bind_named(
             device,
             &[
-                &params_buf,
-                &cell_ranges,
-                sorted_values,
-                &points,
-                &table_buf,
-                shading,
+                ("params", &params_buf),
+                ("gaussians", gaussians),
+                ("keys", &keys),
+                ("values", &values),
+            ],
+        );
+        let ranges_bind = tile_ranges.bind(device, &key_count, sorted_keys, &cell_ranges);
+        let points = storage(device, "normals points", n * 16);
+        let points_bind = points_kernel.bind_named(
+            device,
+            &[
+                ("params", &params_buf),
+                ("gaussians", gaussians),
+                ("sorted_values", sorted_values),
+                ("object_of", &object_buf),
+                ("points", &points),
+            ],
+        );
+        let pca_bind = pca.bind_named(
+            device,
+            &[
+                ("params", &params_buf),
+                ("ranges", &cell_ranges),
+                ("sorted_values", sorted_values),
+                ("points", &points),
+                ("objects", &table_buf),
+                ("shading", shading),
             ],
         );
         Ok(GpuNormals {

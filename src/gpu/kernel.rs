@@ -2,14 +2,53 @@
 
 use std::borrow::Cow;
 
-/// A compute pipeline whose bind group 0 takes buffers by the names the WGSL declares them
-/// with ([`Kernel::bind_named`]), or at bindings 0, 1, 2, … in order ([`Kernel::bind`]).
+/// A compiled WGSL module and the names of its group-0 bindings, for kernels that share
+/// one module (several entry points of one file).
+pub struct Shader {
+    module: wgpu::ShaderModule,
+    bindings: Vec<(String, u32)>,
+}
+
+impl Shader {
+    /// Compile `source` (already assembled from its WGSL parts).
+    pub fn new(device: &wgpu::Device, label: &'static str, source: &str) -> Shader {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_owned())),
+        });
+        Shader {
+            module,
+            bindings: group0_bindings(label, source),
+        }
+    }
+
+    /// The kernel of entry point `entry`, labelled `label`.
+    pub fn kernel(&self, device: &wgpu::Device, label: &'static str, entry: &str) -> Kernel {
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: None,
+            module: &self.module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let layout = pipeline.get_bind_group_layout(0);
+        Kernel {
+            pipeline,
+            layout,
+            label,
+            bindings: self.bindings.clone(),
+        }
+    }
+}
+
+/// A compute pipeline whose bind group 0 takes resources by the names the WGSL declares
+/// them with ([`Kernel::bind_named`]): no caller knows a binding number.
 pub struct Kernel {
     pub pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     label: &'static str,
-    /// `var` name → binding number of group 0, from the source (empty when built from a
-    /// module without its source).
+    /// `var` name → binding number of group 0, read from the source.
     bindings: Vec<(String, u32)>,
 }
 
@@ -30,36 +69,7 @@ fn group0_bindings(label: &str, source: &str) -> Vec<(String, u32)> {
 impl Kernel {
     /// Compile `source` (already assembled from its WGSL parts) and take `entry`.
     pub fn new(device: &wgpu::Device, label: &'static str, source: &str, entry: &str) -> Kernel {
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(Cow::Owned(source.to_owned())),
-        });
-        let mut kernel = Kernel::from_module(device, label, &module, entry);
-        kernel.bindings = group0_bindings(label, source);
-        kernel
-    }
-
-    pub fn from_module(
-        device: &wgpu::Device,
-        label: &'static str,
-        module: &wgpu::ShaderModule,
-        entry: &str,
-    ) -> Kernel {
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(label),
-            layout: None,
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        let layout = pipeline.get_bind_group_layout(0);
-        Kernel {
-            pipeline,
-            layout,
-            label,
-            bindings: Vec::new(),
-        }
+        Shader::new(device, label, source).kernel(device, label, entry)
     }
 
     /// Bind each buffer to the binding its WGSL `var` is declared at. A name the source
@@ -112,19 +122,6 @@ impl Kernel {
         })
     }
 
-    /// Bind explicit entries (buffers or parts of them at binding numbers).
-    pub fn bind_entries(
-        &self,
-        device: &wgpu::Device,
-        entries: &[wgpu::BindGroupEntry],
-    ) -> wgpu::BindGroup {
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.label),
-            layout: &self.layout,
-            entries,
-        })
-    }
-
     fn binding_of(&self, name: &str) -> u32 {
         self.bindings
             .iter()
@@ -136,32 +133,6 @@ impl Kernel {
                     self.label, self.bindings
                 )
             })
-    }
-
-    /// Bind `buffers` to bindings 0, 1, 2, … (whole buffers).
-    pub fn bind(&self, device: &wgpu::Device, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
-        let numbered: Vec<(u32, &wgpu::Buffer)> = (0u32..).zip(buffers.iter().copied()).collect();
-        self.bind_at(device, &numbered)
-    }
-
-    /// Bind buffers at explicit binding numbers (for entry points that skip some).
-    pub fn bind_at(
-        &self,
-        device: &wgpu::Device,
-        buffers: &[(u32, &wgpu::Buffer)],
-    ) -> wgpu::BindGroup {
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: *i,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.label),
-            layout: &self.layout,
-            entries: &entries,
-        })
     }
 
     /// Record one dispatch of `groups` workgroups (split over x and y, see [`dispatch_1d`]).

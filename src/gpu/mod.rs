@@ -12,7 +12,7 @@ pub mod scan;
 pub mod sort;
 pub mod stages;
 
-pub use kernel::{dispatch_1d, Kernel};
+pub use kernel::{dispatch_1d, Kernel, Shader};
 
 use std::fmt::Write as _;
 use std::sync::{Arc, Mutex};

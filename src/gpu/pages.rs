@@ -117,6 +117,12 @@ impl PageRanges {
     }
 }
 
+/// The WGSL name of page `k` of the paged array `name` (as [`wgsl_paged_reader`] declares
+/// it), to bind it by name.
+pub fn page_var(name: &str, k: u32) -> String {
+    format!("{name}_{k}")
+}
+
 /// WGSL declaring `pages` read-only bindings `NAME_0 … NAME_{pages-1}` of `array<TY>` from
 /// binding `first`, and `fn NAME_at(i: u32) -> TY` reading record i from its page, with
 /// page size `1 << SHIFT` where SHIFT is the WGSL expression `shift`.
@@ -129,8 +135,9 @@ pub fn wgsl_paged_reader(name: &str, ty: &str, first: u32, pages: u32, shift: &s
     let mut s = String::new();
     for k in 0..pages {
         s += &format!(
-            "@group(0) @binding({}) var<storage, read> {name}_{k}: array<{ty}>;\n",
-            first + k
+            "@group(0) @binding({}) var<storage, read> {}: array<{ty}>;\n",
+            first + k,
+            page_var(name, k)
         );
     }
     s += &format!(

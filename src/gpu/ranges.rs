@@ -16,4 +16,23 @@ impl Ranges {
             kernel: Kernel::new(device, "ranges", src, "main"),
         }
     }
+
+    /// The pass over `sorted_keys` (their number in `key_count`) writing `ranges`, one
+    /// (start, end) per key value.
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        key_count: &wgpu::Buffer,
+        sorted_keys: &wgpu::Buffer,
+        ranges: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
+        self.kernel.bind_named(
+            device,
+            &[
+                ("key_count", key_count),
+                ("tile_keys", sorted_keys),
+                ("ranges", ranges),
+            ],
+        )
+    }
 }

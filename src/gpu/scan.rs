@@ -5,7 +5,7 @@ use wgpu::util::DeviceExt;
 
 use bytemuck::{Pod, Zeroable};
 
-use super::Kernel;
+use super::{Kernel, Shader};
 
 /// `ScanParams` of `shaders/gpu/scan.wgsl`.
 #[repr(C)]
@@ -36,19 +36,10 @@ pub struct ScanPlan {
 
 impl Scan {
     pub fn new(device: &wgpu::Device) -> Scan {
-        let src = include_str!("../../shaders/gpu/scan.wgsl");
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("scan"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
+        let shader = Shader::new(device, "scan", include_str!("../../shaders/gpu/scan.wgsl"));
         Scan {
-            scan_blocks: Kernel::from_module(device, "scan_blocks", &module, "scan_blocks"),
-            add_offsets: Kernel::from_module(
-                device,
-                "add_block_offsets",
-                &module,
-                "add_block_offsets",
-            ),
+            scan_blocks: shader.kernel(device, "scan_blocks", "scan_blocks"),
+            add_offsets: shader.kernel(device, "add_block_offsets", "add_block_offsets"),
         }
     }
 
@@ -79,10 +70,15 @@ impl Scan {
             let params = &buffers[buffers.len() - 2];
             let sums = &buffers[buffers.len() - 1];
             let level_data = current.map_or(data, |i| &buffers[i]);
+            let named = [
+                ("params", params),
+                ("data", level_data),
+                ("block_sums", sums),
+            ];
             levels.push(Level {
                 blocks,
-                scan_bind: self.scan_blocks.bind(device, &[params, level_data, sums]),
-                add_bind: self.add_offsets.bind(device, &[params, level_data, sums]),
+                scan_bind: self.scan_blocks.bind_named(device, &named),
+                add_bind: self.add_offsets.bind_named(device, &named),
             });
             if blocks == 1 {
                 break;

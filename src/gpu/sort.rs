@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use bytemuck::{Pod, Zeroable};
 
 use super::scan::{Scan, ScanPlan};
-use super::{Executor, Kernel};
+use super::{Executor, Kernel, Shader};
 
 /// `SortParams` of `shaders/gpu/radix_sort.wgsl`.
 #[repr(C)]
@@ -86,14 +86,10 @@ pub fn source(executor: Executor) -> String {
 
 impl RadixSort {
     pub fn new(device: &wgpu::Device, executor: Executor) -> RadixSort {
-        let src = source(executor);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("radix_sort"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
+        let shader = Shader::new(device, "radix_sort", &source(executor));
         RadixSort {
-            count: Kernel::from_module(device, "radix count_digits", &module, "count_digits"),
-            scatter: Kernel::from_module(device, "radix scatter", &module, "scatter"),
+            count: shader.kernel(device, "radix count_digits", "count_digits"),
+            scatter: shader.kernel(device, "radix scatter", "scatter"),
         }
     }
 
@@ -140,14 +136,18 @@ impl RadixSort {
                     buffers.values,
                 )
             };
+            let digits = [
+                ("params", &params),
+                ("key_count", buffers.count),
+                ("keys_in", kin),
+                ("counts", &counts),
+            ];
+            let moves = [("values_in", vin), ("keys_out", kout), ("values_out", vout)];
             passes.push(Pass {
-                count_bind: self
-                    .count
-                    .bind(device, &[&params, buffers.count, kin, &counts]),
-                scatter_bind: self.scatter.bind(
-                    device,
-                    &[&params, buffers.count, kin, &counts, vin, kout, vout],
-                ),
+                count_bind: self.count.bind_named(device, &digits),
+                scatter_bind: self
+                    .scatter
+                    .bind_named(device, &[&digits[..], &moves].concat()),
             });
             owned.push(params);
         }

@@ -75,6 +75,17 @@ fn blocks_reached(particles: &Particles, grid: &Grid) -> u32 {
 
 /// First pool size: twice the blocks `reached` at the start (at least 64), at most
 /// `max_blocks`. [`GpuSim::fit_pool`] grows it between frames.
+/// Entries of the gather path's cell ranges: one per base cell of a quadratic stencil
+/// ((cells − 1) per axis, every stencil on the grid), and one for particles off it.
+pub fn gather_range_entries(cells: glam::UVec3) -> u64 {
+    cells
+        .to_array()
+        .iter()
+        .map(|c| u64::from(c.saturating_sub(1)))
+        .product::<u64>()
+        + 1
+}
+
 fn initial_pool(reached: u32, max_blocks: u32) -> u32 {
     (2 * reached).max(64).min(max_blocks)
 }
@@ -277,6 +288,13 @@ impl GpuSim {
         let base_cells = (grid.cells - 1).element_product();
         let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
         let max_pool_blocks = max_pool_blocks(&gpu.limits, (path, &step, separation), blocks);
+        if blocks > max_pool_blocks {
+            // Said at setup, not hours in: the domain is larger than any pool this adapter
+            // holds, so only a moving region that stays within the cap can run.
+            log::warn!(
+                "the simulation's domain has {blocks} blocks of 4³ grid nodes and this adapter's grid pool holds at most {max_pool_blocks} (its grid texture and one storage binding): the run stops with an error if the moving region grows past that; a larger simulation.dx or a smaller simulation.domain avoids it"
+            );
+        }
         let reached = blocks_reached(particles, grid);
         if reached > max_pool_blocks {
             return Err(SimSetupError::PoolAtLimit {
@@ -310,7 +328,7 @@ impl GpuSim {
                 gpu,
                 "sim cell ranges",
                 match path {
-                    P2gPath::Gather => (u64::from(base_cells) + 1) * 8,
+                    P2gPath::Gather => gather_range_entries(grid.cells) * 8,
                     _ => 16,
                 },
             ),

@@ -1,7 +1,7 @@
-//! Relighting on the GPU (docs/method.md §8, docs/relighting.md): the shadow volume
-//! (`shaders/render/shadow_splat.wgsl`, `shadow_mark.wgsl`, `shadow_transmit.wgsl`: the
-//! transmittance only of the voxels the shade pass will read) and the Blinn-Phong shade
-//! pass (`shade.wgsl`), all sharing `shaders/render/lighting.wgsl`. The renderer runs the
+//! Relighting on the GPU (docs/method.md §8, docs/relighting.md): the state of the
+//! shadow volume (the transmittance only of the voxels the shade pass will read) and of
+//! the Blinn-Phong shade pass; the four passes are in [`passes`] (`lighting/passes.rs`), all
+//! sharing `shaders/render/lighting.wgsl`. The renderer runs the
 //! shadow passes and the shade pass right after projecting (which culls), so the
 //! rasteriser composites shaded colours. CPU twins: [`crate::relight`].
 
@@ -9,10 +9,15 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use wgpu::util::DeviceExt;
 
+mod passes;
+
+#[cfg(test)]
 use super::{shader_source, COMMON};
-use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::gpu::{GpuContext, GpuError};
 use crate::relight::shadow::VolumeGrid;
 use crate::relight::{PointLight, ShadingParams, MAX_LIGHTS};
+pub(crate) use passes::FrameInputs;
+use passes::{Shade, ShadowMark, ShadowSplat, ShadowTransmit};
 
 pub(crate) const LIGHTING: &str = include_str!("../../../shaders/render/lighting.wgsl");
 
@@ -58,10 +63,10 @@ pub struct LightingSetup {
 
 /// The GPU state of relighting.
 pub(crate) struct Lighting {
-    pub shade: Kernel,
-    pub splat: Kernel,
-    pub mark: Kernel,
-    pub transmit: Kernel,
+    pub shade: Shade,
+    pub splat: ShadowSplat,
+    pub mark: ShadowMark,
+    pub transmit: ShadowTransmit,
     pub lights: wgpu::Buffer,
     pub materials: wgpu::Buffer,
     /// Per Gaussian `vec2<u32>`: packed normal, material.
@@ -81,15 +86,6 @@ pub(crate) struct Lighting {
     pub max_lights: usize,
     /// The shading records as uploaded (rest normals of simulated Gaussians for derive).
     pub rest_shading: Vec<[u32; 2]>,
-}
-
-fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
-    Kernel::new(
-        device,
-        label,
-        &shader_source(&[COMMON, LIGHTING, pass]),
-        "main",
-    )
 }
 
 impl Lighting {
@@ -144,26 +140,10 @@ impl Lighting {
             })
         };
         Ok(Lighting {
-            shade: kernel(
-                device,
-                "shade",
-                include_str!("../../../shaders/render/shade.wgsl"),
-            ),
-            splat: kernel(
-                device,
-                "shadow_splat",
-                include_str!("../../../shaders/render/shadow_splat.wgsl"),
-            ),
-            mark: kernel(
-                device,
-                "shadow_mark",
-                include_str!("../../../shaders/render/shadow_mark.wgsl"),
-            ),
-            transmit: kernel(
-                device,
-                "shadow_transmit",
-                include_str!("../../../shaders/render/shadow_transmit.wgsl"),
-            ),
+            shade: Shade::new(device),
+            splat: ShadowSplat::new(device),
+            mark: ShadowMark::new(device),
+            transmit: ShadowTransmit::new(device),
             lights: zeroed("lights", std::mem::size_of::<LightsGpu>() as u64),
             materials: init("shade materials", bytemuck::cast_slice(&materials)),
             shading: init("shading", &shading_bytes),

@@ -23,7 +23,7 @@ use glam::Vec3;
 
 pub use crate::gpu::buffers::read_buffer;
 use crate::gpu::buffers::storage;
-use crate::gpu::pages::{PageRanges, Pages};
+use crate::gpu::pages::{page_var, PageRanges, Pages};
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
@@ -32,7 +32,7 @@ use crate::gpu::{Executor, GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
-use lighting::{Lighting, LightingSetup};
+use lighting::{FrameInputs, Lighting, LightingSetup};
 
 pub(crate) const COMMON: &str = include_str!("../../../shaders/common.wgsl");
 pub(crate) const SH: &str = include_str!("../../../shaders/sh.wgsl");
@@ -174,30 +174,28 @@ fn too_many_pages_for(what: &'static str, gpu: &GpuContext, pages: Pages) -> Gpu
     }
 }
 
-/// Bind `buffers` at their numbers and the projections' pages from
-/// [`passes::PROJECTED_PAGES_AT`].
+/// Bind `buffers` by name and the projections' pages as `projected_0`, `projected_1`, …
+/// (the names [`passes::projected_reader`] declares).
 fn bind_with_pages(
     kernel: &crate::gpu::Kernel,
     device: &wgpu::Device,
-    buffers: &[(u32, &wgpu::Buffer)],
+    buffers: &[(&str, &wgpu::Buffer)],
     projected: &[wgpu::BufferBinding],
 ) -> wgpu::BindGroup {
-    let mut entries: Vec<wgpu::BindGroupEntry> = buffers
-        .iter()
-        .map(|(i, b)| wgpu::BindGroupEntry {
-            binding: *i,
-            resource: b.as_entire_binding(),
-        })
+    let names: Vec<String> = (0..projected.len() as u32)
+        .map(|k| page_var("projected", k))
         .collect();
-    entries.extend(
-        (passes::PROJECTED_PAGES_AT..)
-            .zip(projected)
-            .map(|(i, part)| wgpu::BindGroupEntry {
-                binding: i,
-                resource: wgpu::BindingResource::Buffer(part.clone()),
-            }),
+    let mut parts: Vec<(&str, wgpu::BufferBinding)> = buffers
+        .iter()
+        .map(|(name, b)| (*name, b.as_entire_buffer_binding()))
+        .collect();
+    parts.extend(
+        names
+            .iter()
+            .map(String::as_str)
+            .zip(projected.iter().cloned()),
     );
-    kernel.bind_entries(device, &entries)
+    kernel.bind_named_parts(device, &parts)
 }
 
 fn tile_bits(tiles: u32) -> u32 {
@@ -540,54 +538,6 @@ impl GpuRenderer {
         }
     }
 
-    /// Bind groups of the lighting passes over the current buffers (cheap; made per frame
-    /// so that re-uploads and grown buffers need no bookkeeping).
-    fn lighting_binds(&self, gpu: &GpuContext, l: &Lighting) -> LightingBinds {
-        let s = self.splats.as_ref().expect("upload() before render()");
-        let device = &gpu.device;
-        LightingBinds {
-            splat: l
-                .splat
-                .bind(device, &[&l.lights, &s.gaussians, &l.depth, &l.count]),
-            mark: l.mark.bind(
-                device,
-                &[
-                    &self.frame,
-                    &l.lights,
-                    &s.gaussians,
-                    &l.shading,
-                    &s.depth_keys,
-                    &l.asked,
-                    &l.asked_list,
-                    &l.transmit_args,
-                ],
-            ),
-            transmit: l.transmit.bind(
-                device,
-                &[
-                    &l.lights,
-                    &l.depth,
-                    &l.transmittance,
-                    &l.asked_list,
-                    &l.transmit_args,
-                ],
-            ),
-            shade: l.shade.bind(
-                device,
-                &[
-                    &self.frame,
-                    &l.lights,
-                    &s.gaussians,
-                    &l.shading,
-                    &l.materials,
-                    &l.transmittance,
-                    &s.depth_keys,
-                    &s.projected,
-                ],
-            ),
-        }
-    }
-
     fn render_once(
         &self,
         gpu: &GpuContext,
@@ -605,11 +555,17 @@ impl GpuRenderer {
         let groups = s.count.div_ceil(256);
         // The frame's stages, in order. All go into one compute pass (each dispatch is its
         // own synchronisation scope) unless passes are profiled one by one.
+        let inputs = FrameInputs {
+            frame: &self.frame,
+            gaussians: &s.gaussians,
+            depth_keys: &s.depth_keys,
+            projected: &s.projected,
+        };
         let light_binds = self
             .lighting
             .as_ref()
             .filter(|_| s.count > 0)
-            .map(|l| self.lighting_binds(gpu, l));
+            .map(|l| l.binds(&gpu.device, &inputs));
         let mut stages: Vec<Stage> = Vec::new();
         if let Some(l) = &self.lighting {
             gpu.queue
@@ -627,14 +583,13 @@ impl GpuRenderer {
             if l.grid.is_some() {
                 // After the projection, which culls: only what is shaded asks for shadows.
                 stages.push(Stage::new("shadows", move |c| {
-                    l.splat.dispatch(c, &b.splat, groups);
-                    l.mark.dispatch(c, &b.mark, groups);
-                    l.transmit
-                        .dispatch_indirect(c, &b.transmit, &l.transmit_args, 0);
+                    l.splat.record(c, &b.splat, s.count);
+                    l.mark.record(c, &b.mark, s.count);
+                    l.transmit.record(c, &b.transmit, l);
                 }));
             }
             stages.push(Stage::new("shade", move |c| {
-                l.shade.dispatch(c, &b.shade, groups)
+                l.shade.record(c, &b.shade, s.count)
             }));
         }
         if s.count > 0 {
@@ -728,11 +683,4 @@ impl GpuRenderer {
         let stats: Stats = *bytemuck::from_bytes(&stats_bytes[..std::mem::size_of::<Stats>()]);
         Ok((rgba, stats))
     }
-}
-
-struct LightingBinds {
-    splat: wgpu::BindGroup,
-    mark: wgpu::BindGroup,
-    transmit: wgpu::BindGroup,
-    shade: wgpu::BindGroup,
 }

@@ -3,10 +3,11 @@
 
 use super::{shader_source, COMMON, SH};
 use crate::gpu::pages::wgsl_paged_reader;
-use crate::gpu::{Executor, Kernel};
+use crate::gpu::{Executor, Kernel, Shader};
 
-/// The first binding of the projected Gaussians' pages in the passes that read them in
-/// any order (tile keys, rasterize): `projected_0` … `projected_{pages-1}`.
+/// The first binding number of the projected Gaussians' pages in the passes that read
+/// them in any order (tile keys, rasterize), after their other bindings; they are bound by
+/// their names `projected_0` … `projected_{pages-1}` ([`page_var`](crate::gpu::pages::page_var)).
 pub const PROJECTED_PAGES_AT: u32 = 8;
 
 fn projected_reader(pages: u32) -> String {
@@ -53,19 +54,11 @@ impl TileKeys {
             include_str!("../../../shaders/render/tile_keys.wgsl"),
             &projected_reader(pages),
         ]);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("tile_keys"),
-            source: wgpu::ShaderSource::Wgsl(src.into()),
-        });
+        let shader = Shader::new(device, "tile_keys", &src);
         TileKeys {
-            gather: Kernel::from_module(
-                device,
-                "tile_keys gather_counts",
-                &module,
-                "gather_counts",
-            ),
-            total: Kernel::from_module(device, "tile_keys total", &module, "total"),
-            emit: Kernel::from_module(device, "tile_keys emit", &module, "emit"),
+            gather: shader.kernel(device, "tile_keys gather_counts", "gather_counts"),
+            total: shader.kernel(device, "tile_keys total", "total"),
+            emit: shader.kernel(device, "tile_keys emit", "emit"),
             pages,
         }
     }

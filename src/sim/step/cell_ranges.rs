@@ -24,14 +24,10 @@ impl StepPass for CellRanges {
 
     fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
         let b = at.b;
-        Bound::Whole(self.ranges.kernel.bind_named(
-            device,
-            &[
-                ("key_count", &b.key_count),
-                ("tile_keys", at.sorted().keys),
-                ("ranges", &b.ranges),
-            ],
-        ))
+        Bound::Whole(
+            self.ranges
+                .bind(device, &b.key_count, at.sorted().keys, &b.ranges),
+        )
     }
 
     /// One invocation per sorted particle.
