@@ -265,7 +265,8 @@ impl GpuSim {
             P2gPath::Atomic => Some(Scatter::Float),
             P2gPath::Fixed => Some(Scatter::Fixed),
         };
-        let passes = Passes::new(device, gpu.executor(), scatter, separation);
+        let used = crate::sim::models::ModelsUsed::of(materials);
+        let passes = Passes::new(device, gpu.executor(), (scatter, separation), &used);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]

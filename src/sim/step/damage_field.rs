@@ -2,9 +2,10 @@
 //! D_i and whether a broken particle reaches the node (two-field separation, first pass).
 
 use crate::gpu::Kernel;
+use crate::sim::models::ModelsUsed;
 
 use super::{
-    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
+    gather_bindings, gather_source, material_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
     StepPass,
 };
 
@@ -13,10 +14,10 @@ pub(crate) struct DamageField {
 }
 
 impl DamageField {
-    pub fn new(device: &wgpu::Device) -> Self {
+    pub fn new(device: &wgpu::Device, used: &ModelsUsed) -> Self {
         let src = gather_source(include_str!("../../../shaders/sim/step/damage_field.wgsl"));
         DamageField {
-            kernel: step_kernel(device, "sim damage field", &src),
+            kernel: material_kernel(device, "sim damage field", &src, used),
         }
     }
 

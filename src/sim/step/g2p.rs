@@ -3,8 +3,9 @@
 //! term.
 
 use crate::gpu::Kernel;
+use crate::sim::models::ModelsUsed;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
+use super::{material_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
 pub(crate) struct G2p {
     kernel: Kernel,
@@ -14,13 +15,17 @@ impl G2p {
     /// With `next_affine`, G2P also writes the next step's affine term (the atomic path,
     /// whose later steps then skip [`super::Prepare`]); with `separation`, each particle
     /// reads its own field (two-field separation compiled in).
-    pub fn new(device: &wgpu::Device, next_affine: bool, separation: bool) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        (next_affine, separation): (bool, bool),
+        used: &ModelsUsed,
+    ) -> Self {
         let src = format!(
             "const NEXT_AFFINE: bool = {next_affine};\nconst SEPARATION: bool = {separation};\n{}",
             include_str!("../../../shaders/sim/step/g2p.wgsl")
         );
         G2p {
-            kernel: step_kernel(device, "sim g2p", &src),
+            kernel: material_kernel(device, "sim g2p", &src, used),
         }
     }
 

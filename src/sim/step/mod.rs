@@ -71,15 +71,22 @@ use crate::gpu::pages::PageRanges;
 use crate::gpu::sort::SortPlan;
 use crate::gpu::stages::Stage;
 use crate::gpu::{Executor, Kernel};
+use crate::sim::models::ModelsUsed;
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
-/// declarations, the material models and their dispatch, then the pass.
+/// declarations, the material models and their dispatch (with cases for every model),
+/// then the pass.
 pub(crate) fn source(pass: &str) -> String {
+    source_for(pass, &ModelsUsed::all())
+}
+
+/// As [`source`], with dispatch cases for the models in `used` only.
+pub(crate) fn source_for(pass: &str, used: &ModelsUsed) -> String {
     [
         crate::sim::wgsl::library().as_str(),
         crate::sim::codes::step_wgsl().as_str(),
         include_str!("../../../shaders/sim/step/common.wgsl"),
-        crate::sim::models::wgsl().as_str(),
+        crate::sim::models::wgsl_for(used).as_str(),
         include_str!("../../../shaders/sim/step/grid_update.wgsl"),
         include_str!("../../../shaders/sim/step/separation.wgsl"),
         pass,
@@ -113,9 +120,21 @@ fn gather_bindings<'a>(
     ]
 }
 
-/// A step pass: its WGSL after the shared modules, entry point `main`.
+/// A step pass that calls no material function: its WGSL after the shared modules, entry
+/// point `main`.
 fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
     Kernel::new(device, label, &source(pass), "main")
+}
+
+/// A step pass that calls the material dispatch (`material_kirchhoff`, `_plasticity`,
+/// `_damage`, `_stress_scale`), built for the simulation's models `used`.
+fn material_kernel(
+    device: &wgpu::Device,
+    label: &'static str,
+    pass: &str,
+    used: &ModelsUsed,
+) -> Kernel {
+    Kernel::new(device, label, &source_for(pass, used), "main")
 }
 
 /// The buffers of the step, named as the passes' WGSL names them where it can.
@@ -284,11 +303,11 @@ impl Passes {
     pub fn new(
         device: &wgpu::Device,
         executor: Executor,
-        scatter: Option<Scatter>,
-        separation: bool,
+        (scatter, separation): (Option<Scatter>, bool),
+        used: &ModelsUsed,
     ) -> Passes {
         let atomic = scatter.is_some();
-        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, atomic))];
+        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, atomic, used))];
         match scatter {
             Some(scatter) => {
                 passes.push(Box::new(MarkParticles::new(device)));
@@ -308,14 +327,14 @@ impl Passes {
                 passes.push(Box::new(MarkBlocks::new(device)));
                 passes.push(Box::new(CompactBlocks::new(device)));
                 if separation {
-                    passes.push(Box::new(DamageField::new(device)));
+                    passes.push(Box::new(DamageField::new(device, used)));
                     passes.push(Box::new(DamageGradient::new(device)));
                     passes.push(Box::new(Ridge::new(device)));
                 }
                 passes.push(Box::new(P2gGather::new(device, separation)));
             }
         }
-        passes.push(Box::new(G2p::new(device, atomic, separation)));
+        passes.push(Box::new(G2p::new(device, (atomic, separation), used)));
         Passes {
             passes,
             scatter: atomic,

@@ -2,8 +2,9 @@
 //! term m C − Δt V⁰ (4/Δx²) τ(F) (P2G, part 1).
 
 use crate::gpu::Kernel;
+use crate::sim::models::ModelsUsed;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
+use super::{material_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
 pub(crate) struct Prepare {
     kernel: Kernel,
@@ -13,10 +14,10 @@ pub(crate) struct Prepare {
 }
 
 impl Prepare {
-    pub fn new(device: &wgpu::Device, first_step_only: bool) -> Self {
+    pub fn new(device: &wgpu::Device, first_step_only: bool, used: &ModelsUsed) -> Self {
         let src = include_str!("../../../shaders/sim/step/prepare.wgsl");
         Prepare {
-            kernel: step_kernel(device, "sim prepare", src),
+            kernel: material_kernel(device, "sim prepare", src, used),
             first_step_only,
         }
     }
