@@ -3,7 +3,7 @@
 // the cleared (0, 0).
 
 @group(0) @binding(0) var<storage, read> key_count: array<u32>;
-@group(0) @binding(1) var<storage, read> tile_keys: array<u32>;
+@group(0) @binding(1) var<storage, read> sorted_keys: array<u32>;
 @group(0) @binding(2) var<storage, read_write> ranges: array<vec2<u32>>;
 
 @compute @workgroup_size(256)
@@ -14,11 +14,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if i >= n {
         return;
     }
-    let t = tile_keys[i];
-    if i == 0u || tile_keys[i - 1u] != t {
+    let t = sorted_keys[i];
+    if i == 0u || sorted_keys[i - 1u] != t {
         ranges[t].x = i;
     }
-    if i + 1u == n || tile_keys[i + 1u] != t {
+    if i + 1u == n || sorted_keys[i + 1u] != t {
         ranges[t].y = i + 1u;
     }
 }

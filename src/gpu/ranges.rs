@@ -30,7 +30,7 @@ impl Ranges {
             device,
             &[
                 ("key_count", key_count),
-                ("tile_keys", sorted_keys),
+                ("sorted_keys", sorted_keys),
                 ("ranges", ranges),
             ],
         )
