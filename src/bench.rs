@@ -314,6 +314,9 @@ pub fn sim_bench(
     peer: Option<Peer>,
     out: &mut dyn Write,
 ) -> Result<()> {
+    if let Some(peer) = peer {
+        peer.check()?;
+    }
     writeln!(out, "adapter: {}", gpu.describe())?;
     writeln!(
         out,
@@ -361,8 +364,12 @@ pub fn sim_bench(
     }
     if let Some(peer) = peer {
         let case = SimCase::with_model(20_000, 64, SimModel::FixedCorotated);
-        let (line, peer_ms) = peer.run(&case, steps)?;
+        let run = peer.run(&case, steps)?;
+        let (line, peer_ms) = (&run.line, run.ms);
         writeln!(out, "peer: {line}: {peer_ms:.2} ms/step")?;
+        for pass in &run.passes {
+            writeln!(out, "peer {pass}")?;
+        }
         for (model, t) in &small {
             writeln!(
                 out,

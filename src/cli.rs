@@ -99,7 +99,8 @@ pub(crate) enum BenchWhat {
         #[arg(long)]
         per_pass: bool,
         /// Also step the 20k fixed-corotated case in a peer, in the same run, and print the
-        /// ratios (taichi: `benches/peers/taichi_mpm.py`, needs `pip install taichi==1.7.4`).
+        /// ratios (taichi: `benches/peers/taichi_mpm.py`, needs `pip install taichi==1.7.4`;
+        /// slosh: `benches/peers/slosh/`, built beforehand as its README says).
         #[arg(long, value_enum)]
         peer: Option<splatter::bench::Peer>,
         /// Instead, step one NACC case of about this many particles (a cube, 8 per cell, on
