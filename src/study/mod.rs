@@ -7,6 +7,7 @@
 pub mod atlas;
 pub mod chart;
 pub mod convergence;
+pub mod driven;
 pub mod fit;
 pub mod plastic_bar;
 pub mod runner;

@@ -35,7 +35,7 @@
 
 use glam::{DMat3, DVec3, UVec3};
 
-use crate::sim::cpu::{check, g2p, grid_update, p2g};
+use super::driven::driven_step;
 use crate::sim::models::VonMises;
 use crate::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
@@ -333,27 +333,19 @@ pub fn run(spec: &BarSpec) -> BarResult {
             Phase::Unload => Some(-v0),
             Phase::Release => None,
         };
-        p2g(
-            &p,
-            &mut grid,
-            &materials,
-            dt,
-            params.transfer,
-            params.separation,
-        );
-        grid_update(&mut grid, dt, DVec3::ZERO, &params.boundaries);
-        if let Some(speed) = speed {
+        // The grips: their nodes move apart (or together) along x at the grip speed.
+        let pull = |grid: &mut Grid| {
+            let Some(speed) = speed else { return };
             for (idx, v) in grid.velocity.iter_mut().enumerate() {
                 if sides[idx] != 0.0 && grid.mass[idx] > 0.0 {
                     *v = DVec3::X * (sides[idx] * speed);
                 }
             }
-        }
-        g2p(&mut p, &grid, &materials, dt, DVec3::ZERO, params.transfer);
+        };
+        let ok = driven_step(&mut p, &mut grid, &materials, &params, pull);
         steps += 1;
         t += dt;
-        let h = check(&p, &grid, dt);
-        if h.non_finite > 0 || h.outside > 0 {
+        if !ok {
             healthy = false;
             break;
         }

@@ -19,7 +19,7 @@
 
 use glam::DVec3;
 
-use crate::sim::cpu::{check, g2p, grid_update, p2g};
+use super::driven::driven_step;
 use crate::sim::models::{PlasticLaw, Snow};
 use crate::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
@@ -169,27 +169,20 @@ pub fn run(spec: &PressSpec) -> PressResult {
         params.dt = dt;
         let speed = spec.speed * (t / ramp).min(1.0);
         let plate = top0 - travel(t);
-        p2g(
-            &p,
-            &mut grid,
-            &materials,
-            dt,
-            params.transfer,
-            params.separation,
-        );
-        grid_update(&mut grid, dt, DVec3::ZERO, &params.boundaries);
-        let nodes = grid.nodes();
-        for (idx, v) in grid.velocity.iter_mut().enumerate() {
-            let k = idx / (nodes.x as usize * nodes.y as usize);
-            if grid.mass[idx] > 0.0 && grid.lo.z + k as f64 * dx >= plate - 1e-9 * dx {
-                v.z = -speed;
+        // The plate: the nodes at or above it move down at its speed.
+        let press = |grid: &mut Grid| {
+            let nodes = grid.nodes();
+            for (idx, v) in grid.velocity.iter_mut().enumerate() {
+                let k = idx / (nodes.x as usize * nodes.y as usize);
+                if grid.mass[idx] > 0.0 && grid.lo.z + k as f64 * dx >= plate - 1e-9 * dx {
+                    v.z = -speed;
+                }
             }
-        }
-        g2p(&mut p, &grid, &materials, dt, DVec3::ZERO, params.transfer);
+        };
+        let ok = driven_step(&mut p, &mut grid, &materials, &params, press);
         t += dt;
         steps += 1;
-        let h = check(&p, &grid, dt);
-        if h.non_finite > 0 || h.outside > 0 {
+        if !ok {
             healthy = false;
             break;
         }
