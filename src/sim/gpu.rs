@@ -73,8 +73,6 @@ fn blocks_reached(particles: &Particles, grid: &Grid) -> u32 {
     seen.len() as u32
 }
 
-/// First pool size: twice the blocks `reached` at the start (at least 64), at most
-/// `max_blocks`. [`GpuSim::fit_pool`] grows it between frames.
 /// Entries of the gather path's cell ranges: one per base cell of a quadratic stencil
 /// ((cells − 1) per axis, every stencil on the grid), and one for particles off it.
 pub fn gather_range_entries(cells: glam::UVec3) -> u64 {
@@ -86,6 +84,8 @@ pub fn gather_range_entries(cells: glam::UVec3) -> u64 {
         + 1
 }
 
+/// First pool size: twice the blocks `reached` at the start (at least 64), at most
+/// `max_blocks`. [`GpuSim::fit_pool`] grows it between frames.
 fn initial_pool(reached: u32, max_blocks: u32) -> u32 {
     (2 * reached).max(64).min(max_blocks)
 }
