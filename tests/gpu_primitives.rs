@@ -97,26 +97,33 @@ fn scan_saturates_instead_of_wrapping() {
 fn radix_sort_is_a_stable_sort() {
     let gpu = gpu();
     let scan = Scan::new(&gpu.device);
-    // Both workgroup shapes on this adapter, whichever it would choose.
+    // Both workgroup shapes of the block sort and the chunk sort at a few chunk counts, on
+    // this adapter, whichever it would choose.
     for executor in [Executor::Gpu, Executor::Cpu] {
-        stable_sort_cases(
-            &gpu,
-            &scan,
-            &RadixSort::new(&gpu.device, executor),
-            executor,
-        );
+        let sort = RadixSort::blocks(&gpu.device, executor);
+        stable_sort_cases(&gpu, &scan, &sort, &format!("blocks, {executor:?} shape"));
+    }
+    for cores in [1, 2, 17] {
+        let sort = RadixSort::chunked(&gpu.device, cores);
+        stable_sort_cases(&gpu, &scan, &sort, &format!("chunks for {cores} cores"));
     }
 }
 
-fn stable_sort_cases(gpu: &GpuContext, scan: &Scan, sort: &RadixSort, executor: Executor) {
+fn stable_sort_cases(gpu: &GpuContext, scan: &Scan, sort: &RadixSort, method: &str) {
     let mut rng = SplitMix64::new(11);
-    // 1 and 3 passes leave the result in the alternates; 2, 4 and 8 in the inputs.
+    // Odd and even pass counts (the result in the alternates or the inputs), no keys, and
+    // fewer keys than chunks.
     for (n, bits, capacity) in [
-        (1usize, 4u32, 10u32),
+        (0usize, 8u32, 16u32),
+        (1, 4, 10),
+        (50, 16, 100),
         (777, 8, 2048),
         (5000, 11, 9000),
         (20_000, 13, 30_000),
         (300_000, 32, 300_000),
+        // Past 65535 loop iterations per invocation if the chunk sort took one chunk per
+        // lane of a single core's workgroups (see `gpu::sort::chunks`).
+        (2_500_000, 13, 2_500_000),
     ] {
         // Few distinct keys relative to n, so stability is exercised.
         let mask = if bits == 32 {
@@ -161,7 +168,7 @@ fn stable_sort_cases(gpu: &GpuContext, scan: &Scan, sort: &RadixSort, executor: 
         let got_keys = download(gpu, k, n);
         let got_values = download(gpu, v, n);
         let got: Vec<(u32, u32)> = got_keys.into_iter().zip(got_values).collect();
-        assert_eq!(got, expected, "n = {n}, {bits} bits, {executor:?} shape");
+        assert_eq!(got, expected, "n = {n}, {bits} bits, {method}");
     }
 }
 

@@ -331,9 +331,9 @@ fn gaussians_over_pages_render_as_in_one_page() {
     }
 }
 
-/// The sort and the rasteriser have a workgroup shape per kind of adapter (`Executor`);
-/// both shapes give the same image on this adapter, on an image whose size leaves
-/// partial tiles and partial pixel columns.
+/// The rasteriser has a workgroup shape and the sorts a method per kind of adapter
+/// (`Executor`: block radix sort or chunk counting sort); both give the same image on this
+/// adapter, on an image whose size leaves partial tiles and partial pixel columns.
 #[test]
 fn both_workgroup_shapes_render_the_same_image() {
     for gpu in gpus() {

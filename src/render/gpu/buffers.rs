@@ -90,6 +90,12 @@ impl GpuRenderer {
             f.capacity,
             tile_bits(tiles),
         );
+        // The depth sort leaves the order in whichever buffer its last pass wrote.
+        let depth_order = if depth_sort.result_in_alternates() {
+            &s.depth_order_alt
+        } else {
+            &s.depth_order
+        };
         let projected: Vec<wgpu::BufferBinding> = (0..s.pages.pages.count)
             .map(|i| s.pages.pages.window(&s.projected, i, PROJECTED_BYTES))
             .collect();
@@ -109,7 +115,7 @@ impl GpuRenderer {
                 &[
                     ("frame", &self.frame),
                     ("tile_rects", &s.tile_rects),
-                    ("depth_order", &s.depth_order),
+                    ("depth_order", depth_order),
                     ("offsets", &s.offsets),
                 ],
                 &projected,
@@ -121,7 +127,7 @@ impl GpuRenderer {
                 &[
                     ("frame", &self.frame),
                     ("tile_rects", &s.tile_rects),
-                    ("depth_order", &s.depth_order),
+                    ("depth_order", depth_order),
                     ("offsets", &s.offsets),
                     ("key_count", &f.key_count),
                     ("stats", &self.stats),
@@ -134,7 +140,7 @@ impl GpuRenderer {
                 &[
                     ("frame", &self.frame),
                     ("tile_rects", &s.tile_rects),
-                    ("depth_order", &s.depth_order),
+                    ("depth_order", depth_order),
                     ("offsets", &s.offsets),
                     ("tile_keys", &f.tile_keys),
                     ("tile_values", &f.tile_values),

@@ -207,8 +207,8 @@ impl GpuRenderer {
         GpuRenderer::with_executor(gpu, gpu.executor())
     }
 
-    /// With the workgroup shapes of `executor` instead of the adapter's own (the images are
-    /// the same; tests check that on one adapter).
+    /// With the workgroup shapes and the sort of `executor` instead of the adapter's own
+    /// (the images are the same; tests check that on one adapter).
     pub fn with_executor(gpu: &GpuContext, executor: Executor) -> GpuRenderer {
         let device = &gpu.device;
         GpuRenderer {
