@@ -40,12 +40,13 @@ fn count_true(v: vec4<bool>) -> u32 {
     return dot(vec4<u32>(v), vec4<u32>(1u));
 }
 
-// One Gaussian blended behind the quad's pixels.
-fn blend(quad: Quad, xo: vec4<f32>, con: vec4<f32>, color: vec3<f32>, centre_x: f32) -> Quad {
+// One Gaussian blended behind the quad's pixels. Along the invocation's column the
+// exponent −½ Δᵀ Σ'⁻¹ Δ is a quadratic in Δy, p.x + Δy (p.y + p.z Δy), whose coefficients
+// (`column_power`) are computed once per Gaussian for all of the column's pixels.
+fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>) -> Quad {
     var q = quad;
-    let dx = xo.x - centre_x;
     let dy = vec4<f32>(xo.y) - q.centre_y;
-    let power = -0.5 * (con.x * dx * dx + con.z * dy * dy) - con.y * dx * dy;
+    let power = p.x + dy * (p.y + p.z * dy);
     let alpha = min(vec4<f32>(0.99), xo.z * exp(power));
     let next_t = q.t * (1.0 - alpha);
     let visible = q.live & (power <= vec4<f32>(0.0)) & (alpha >= vec4<f32>(MIN_ALPHA));
@@ -58,6 +59,21 @@ fn blend(quad: Quad, xo: vec4<f32>, con: vec4<f32>, color: vec3<f32>, centre_x: 
     q.t = select(q.t, next_t, take);
     q.live &= !saturated;
     return q;
+}
+
+// −½ Δᵀ C Δ = −½ a Δx² − b Δx Δy − ½ c Δy² for the conic (a, b, c) at the column's Δx.
+fn column_power(xo: vec4<f32>, con: vec4<f32>, centre_x: f32) -> vec3<f32> {
+    let dx = xo.x - centre_x;
+    return vec3<f32>(-0.5 * con.x * dx * dx, -con.y * dx, -0.5 * con.z);
+}
+
+// Pixels of the invocation still compositing.
+fn live_pixels(quads: array<Quad, QUADS>) -> u32 {
+    var n = 0u;
+    for (var q = 0u; q < QUADS; q++) {
+        n += count_true(quads[q].live);
+    }
+    return n;
 }
 
 @compute @workgroup_size(THREADS)
@@ -100,22 +116,23 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             batch_color[i] = p.color;
         }
         workgroupBarrier();
-        var live = true;
+        // Pixels that saturate are counted once per batch, not per Gaussian: the early
+        // stop is only checked between batches.
+        let live_before = live_pixels(quads);
+        var live = live_before > 0u;
         for (var k = 0u; k < count && live; k++) {
             let xo = batch_xy_opacity[k];
-            let con = batch_conic[k];
+            let p = column_power(xo, batch_conic[k], centre_x);
             let color = batch_color[k].rgb;
-            var saturated = 0u;
             live = false;
             for (var q = 0u; q < QUADS; q++) {
-                let before = quads[q].live;
-                quads[q] = blend(quads[q], xo, con, color, centre_x);
-                saturated += count_true(before) - count_true(quads[q].live);
+                quads[q] = blend(quads[q], xo, p, color);
                 live = live || any(quads[q].live);
             }
-            if saturated > 0u {
-                atomicAdd(&finished, saturated);
-            }
+        }
+        let saturated = live_before - live_pixels(quads);
+        if saturated > 0u {
+            atomicAdd(&finished, saturated);
         }
         start += count;
     }
