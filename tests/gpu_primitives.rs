@@ -1,9 +1,10 @@
 //! The renderer's GPU building blocks against plain CPU versions: the prefix sum (with its
-//! saturation) and the stable radix sort.
+//! saturation), the stable sorts and the key ranges after them.
 
 use splatter::gpu::buffers::copy_out;
+use splatter::gpu::ranges::Ranges;
 use splatter::gpu::scan::Scan;
-use splatter::gpu::sort::{RadixSort, SortBuffers};
+use splatter::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use splatter::gpu::{Executor, GpuContext};
 use splatter::rng::SplitMix64;
 use wgpu::util::DeviceExt;
@@ -169,7 +170,60 @@ fn stable_sort_cases(gpu: &GpuContext, scan: &Scan, sort: &RadixSort, method: &s
         let got_values = download(gpu, v, n);
         let got: Vec<(u32, u32)> = got_keys.into_iter().zip(got_values).collect();
         assert_eq!(got, expected, "n = {n}, {bits} bits, {method}");
+        if bits <= 16 {
+            let sorted: Vec<u32> = expected.iter().map(|(key, _)| *key).collect();
+            let ranges = key_ranges(gpu, &plan, &count, k, capacity, bits, &sorted);
+            assert_eq!(
+                ranges,
+                cpu_ranges(&sorted, 1 << bits),
+                "n = {n}, {bits} bits, {method}: key ranges"
+            );
+        }
     }
+}
+
+/// The runs of every key value after `plan`'s sort, by `Ranges::after_sort` (read off the
+/// sort's key starts, or by comparing neighbours), as (start, length) with empty runs as
+/// (0, 0): the neighbour pass leaves them cleared, the starts give them their slot.
+fn key_ranges(
+    gpu: &GpuContext,
+    plan: &SortPlan,
+    count: &wgpu::Buffer,
+    sorted_keys: &wgpu::Buffer,
+    capacity: u32,
+    bits: u32,
+    sorted: &[u32],
+) -> Vec<(u32, u32)> {
+    let values = 1usize << bits;
+    let out = upload(gpu, &vec![0u32; 2 * values]);
+    let ranges = Ranges::new(&gpu.device);
+    let pass = ranges.after_sort(&gpu.device, plan, count, sorted_keys, capacity, &out);
+    let mut enc = gpu.device.create_command_encoder(&Default::default());
+    ranges.record(&mut enc.begin_compute_pass(&Default::default()), &pass);
+    gpu.queue.submit([enc.finish()]);
+    let raw = download(gpu, &out, 2 * values);
+    assert!(sorted.len() <= capacity as usize);
+    raw.chunks(2)
+        .map(|r| {
+            if r[1] > r[0] {
+                (r[0], r[1] - r[0])
+            } else {
+                (0, 0)
+            }
+        })
+        .collect()
+}
+
+fn cpu_ranges(sorted: &[u32], values: usize) -> Vec<(u32, u32)> {
+    let mut ranges = vec![(0u32, 0u32); values];
+    for (i, key) in sorted.iter().enumerate() {
+        let r = &mut ranges[*key as usize];
+        if r.1 == 0 {
+            r.0 = i as u32;
+        }
+        r.1 += 1;
+    }
+    ranges
 }
 
 const DIFFERENCE: &str = "

@@ -2,19 +2,78 @@
 //! the start and end (exclusive) of its run. The renderer finds each tile's pairs with it,
 //! the simulation each cell's particles and the normals pass each hash cell's Gaussians.
 
-use super::Kernel;
+use super::sort::SortPlan;
+use super::{Kernel, Shader};
 
-/// `shaders/gpu/ranges.wgsl`: one invocation per sorted key, the key count read on the GPU.
+/// `shaders/gpu/ranges.wgsl`: `kernel`, one invocation per sorted key, the key count read
+/// on the GPU; or `from_starts`, one invocation per key value, after a sort that left each
+/// value's first slot ([`SortPlan::key_starts`]).
 pub struct Ranges {
     pub kernel: Kernel,
+    pub from_starts: Kernel,
+}
+
+/// A bound pass writing the ranges, and its workgroups.
+pub struct RangesPass {
+    bind: wgpu::BindGroup,
+    from_starts: bool,
+    groups: u32,
 }
 
 impl Ranges {
     pub fn new(device: &wgpu::Device) -> Ranges {
-        let src = include_str!("../../shaders/gpu/ranges.wgsl");
+        let shader = Shader::new(
+            device,
+            "ranges",
+            include_str!("../../shaders/gpu/ranges.wgsl"),
+        );
         Ranges {
-            kernel: Kernel::new(device, "ranges", src, "main"),
+            kernel: shader.kernel(device, "ranges", "main"),
+            from_starts: shader.kernel(device, "ranges from starts", "from_starts"),
         }
+    }
+
+    /// The ranges of the keys `sort` sorted into `sorted_keys` (at most `capacity` of
+    /// them, their number in `key_count`), one (start, end) per key value of `ranges`: read
+    /// off the sort's key starts where it has them, else found by comparing neighbours.
+    pub fn after_sort(
+        &self,
+        device: &wgpu::Device,
+        sort: &SortPlan,
+        key_count: &wgpu::Buffer,
+        sorted_keys: &wgpu::Buffer,
+        capacity: u32,
+        ranges: &wgpu::Buffer,
+    ) -> RangesPass {
+        let values = (ranges.size() / 8) as u32;
+        match sort.key_starts() {
+            Some(starts) => RangesPass {
+                bind: self.from_starts.bind_named(
+                    device,
+                    &[
+                        ("key_count", key_count),
+                        ("starts", starts),
+                        ("ranges", ranges),
+                    ],
+                ),
+                from_starts: true,
+                groups: values.div_ceil(256),
+            },
+            None => RangesPass {
+                bind: self.bind(device, key_count, sorted_keys, ranges),
+                from_starts: false,
+                groups: capacity.div_ceil(256),
+            },
+        }
+    }
+
+    pub fn record(&self, cpass: &mut wgpu::ComputePass, pass: &RangesPass) {
+        let kernel = if pass.from_starts {
+            &self.from_starts
+        } else {
+            &self.kernel
+        };
+        kernel.dispatch(cpass, &pass.bind, pass.groups);
     }
 
     /// The pass over `sorted_keys` (their number in `key_count`) writing `ranges`, one

@@ -45,7 +45,7 @@ pub const BITS_PER_PASS: u32 = 4;
 /// Invocations per workgroup of the chunk sort: one SIMD vector of a 256-bit CPU driver.
 pub const CHUNK_LANES: u32 = 8;
 /// The chunk sort's counters (digits × chunks) stay under this, which sets its digit width.
-const CHUNK_COUNTERS: u32 = 1 << 19;
+const CHUNK_COUNTERS: u32 = 1 << 20;
 /// Keys one invocation of the chunk sort walks at most, and its widest digit: lavapipe
 /// stops an invocation after 65535 loop iterations in all (see `chunk_sort.wgsl`).
 pub const CHUNK_KEYS: u32 = 1 << 15;
@@ -99,6 +99,7 @@ pub struct SortPlan {
     prefix_groups: u32,
     passes: Vec<Pass>,
     scan: ScanPlan,
+    key_starts: Option<wgpu::Buffer>,
     _buffers: Vec<wgpu::Buffer>,
 }
 
@@ -141,6 +142,13 @@ impl SortPlan {
     /// Passes over the keys (each a count, a scan and a scatter).
     pub fn passes(&self) -> usize {
         self.passes.len()
+    }
+
+    /// After a chunk sort whose keys fit its one digit: for every key value, the slot of
+    /// its first key (the exclusive prefix sum of the values' counts), so that a value's
+    /// keys lie from its start to the next value's.
+    pub fn key_starts(&self) -> Option<&wgpu::Buffer> {
+        self.key_starts.as_ref()
     }
 }
 
@@ -232,7 +240,7 @@ impl RadixSort {
             Some(base) => scan.plan(device, base, layout.digits),
             None => scan.plan(device, &counts, layout.counters),
         };
-        let passes = layout
+        let passes: Vec<Pass> = layout
             .params
             .iter()
             .enumerate()
@@ -285,12 +293,15 @@ impl RadixSort {
             .collect();
         let mut owned = layout.params;
         owned.push(counts);
-        owned.extend(digit_base);
+        // The digits' bases are the keys' starts when one pass covered every key bit.
+        let key_starts =
+            digit_base.filter(|_| passes.len() == 1 && layout.digits >= 1 << bits.min(31));
         SortPlan {
             groups: layout.groups,
             prefix_groups: layout.digits.div_ceil(CHUNK_LANES),
             passes,
             scan: scan_plan,
+            key_starts,
             _buffers: owned,
         }
     }

@@ -147,10 +147,15 @@ impl GpuRenderer {
                 ],
                 &projected,
             ),
+            ranges: self.tile_ranges.after_sort(
+                device,
+                &tile_sort,
+                &f.key_count,
+                sorted_keys,
+                f.capacity,
+                &f.ranges,
+            ),
             tile_sort,
-            ranges: self
-                .tile_ranges
-                .bind(device, &f.key_count, sorted_keys, &f.ranges),
             rasterize: bind_with_pages(
                 &self.rasterize.kernel,
                 device,

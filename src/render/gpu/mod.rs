@@ -24,7 +24,7 @@ use glam::Vec3;
 pub use crate::gpu::buffers::read_buffer;
 use crate::gpu::buffers::storage;
 use crate::gpu::pages::{page_var, PageRanges, Pages};
-use crate::gpu::ranges::Ranges;
+use crate::gpu::ranges::{Ranges, RangesPass};
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::stages::{self, Stage};
@@ -109,7 +109,7 @@ struct Plans {
     total: wgpu::BindGroup,
     emit: wgpu::BindGroup,
     tile_sort: SortPlan,
-    ranges: wgpu::BindGroup,
+    ranges: RangesPass,
     rasterize: wgpu::BindGroup,
 }
 
@@ -606,9 +606,7 @@ impl GpuRenderer {
                 self.sort.record(c, &self.scan, &p.tile_sort)
             }));
             stages.push(Stage::new("tile ranges", |c| {
-                self.tile_ranges
-                    .kernel
-                    .dispatch(c, &p.ranges, f.capacity.div_ceil(256))
+                self.tile_ranges.record(c, &p.ranges)
             }));
         }
         stages.push(Stage::new("rasterize", |c| {
