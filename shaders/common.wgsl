@@ -98,14 +98,11 @@ fn conic_min_on_segment(d0: vec2<f32>, e: vec2<f32>, conic: vec3<f32>) -> f32 {
     return conic_form(d0 + t * e, conic);
 }
 
-// Does the ellipse dᵀ C d ≤ k² around `xy` reach a pixel centre of tile `tile`? Tested
-// against the rectangle spanned by the tile's pixel centres: either the mean lies inside
-// it, or the ellipse crosses one of its four edges. Tiles that only the ellipse's bounding
-// square reaches are left out (a large share for elongated, deformed Gaussians).
-// Mirrors `render::cpu::ellipse_touches_tile`.
-fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32>) -> bool {
-    let lo = vec2<f32>(tile * TILE) + 0.5;
-    let span = f32(TILE - 1u);
+// Does the ellipse dᵀ C d ≤ k² around `xy` reach a pixel centre of the square of pixel
+// centres from `lo` to `lo + span`? Either the mean lies inside it, or the ellipse crosses
+// one of its four edges. Squares that only the ellipse's bounding square reaches are left
+// out (a large share for elongated, deformed Gaussians).
+fn ellipse_touches_square(xy: vec2<f32>, conic: vec3<f32>, k2: f32, lo: vec2<f32>, span: f32) -> bool {
     let hi = lo + span;
     if all(xy >= lo) && all(xy <= hi) {
         return true;
@@ -117,6 +114,12 @@ fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32
         min(conic_min_on_segment(d, vec2<f32>(0.0, span), conic),
             conic_min_on_segment(d + vec2<f32>(span, 0.0), vec2<f32>(0.0, span), conic)));
     return m <= k2;
+}
+
+// Does the ellipse reach a pixel centre of tile `tile`? Mirrors
+// `render::cpu::ellipse_touches_tile`.
+fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32>) -> bool {
+    return ellipse_touches_square(xy, conic, k2, vec2<f32>(tile * TILE) + 0.5, f32(TILE - 1u));
 }
 
 // The Gaussians one dispatch of a per-Gaussian pass covers. Per-Gaussian arrays may exceed

@@ -362,3 +362,60 @@ fn both_workgroup_shapes_render_the_same_image() {
         assert_eq!(differ, 0);
     }
 }
+
+/// Opaque Gaussians a few pixels wide, scattered so that block edges cut through their
+/// faint tails: the rasteriser walks, per 8×8 block, only the Gaussians that can reach one
+/// of its pixels, and must still composite every pixel whose α reaches 1/255, out to
+/// α = 1/255 itself (beyond 3σ for opaque ones). The CPU reference has no blocks.
+#[test]
+fn block_masks_keep_every_pixel_a_gaussian_reaches() {
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        let mut seed = 0x2545_f491_u32;
+        let mut uniform = move || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let n = 60;
+        let mut splats = Splats {
+            sh_degree: 0,
+            ..Default::default()
+        };
+        for _ in 0..n {
+            let mean = Vec3::new(uniform() - 0.5, uniform() - 0.5, 0.5 * uniform()) * 0.7;
+            let (sx, sy) = (0.01 + 0.03 * uniform(), 0.01 + 0.03 * uniform());
+            let axes = Mat3::from_diagonal(Vec3::new(sx * sx, sy * sy, 1e-4));
+            let turn = Mat3::from_rotation_z(std::f32::consts::PI * uniform());
+            splats.means.push(mean);
+            splats
+                .covariances
+                .push(sym3_from_mat3(turn * axes * turn.transpose()));
+            splats.rotations.push(Quat::IDENTITY);
+            splats.opacities.push(0.9 + 0.1 * uniform());
+            let rgb = [0.3 + 0.7 * uniform(), 0.3 + 0.7 * uniform(), 1.0];
+            splats.sh.extend(sh::rgb_to_dc(rgb));
+        }
+        let splats = f16_rounded(splats);
+        let cam = Camera::look_at(
+            Vec3::new(0.0, 0.0, -2.0),
+            Vec3::ZERO,
+            Vec3::Y,
+            40f32.to_radians(),
+            128,
+            128,
+        );
+        renderer.upload(&gpu, &splats).unwrap();
+        let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
+        let reference = cpu::render(&splats, &cam, Vec3::ZERO);
+        let worst = image
+            .rgba
+            .iter()
+            .zip(&reference)
+            .map(|(a, b)| a.abs_diff(*b))
+            .max()
+            .unwrap();
+        eprintln!("{}: worst channel difference {worst}/255", gpu.describe());
+        assert_eq!(image.stats.visible, n as u32, "{:?}", image.stats);
+        assert!(worst <= 1, "worst channel difference {worst}/255");
+    }
+}

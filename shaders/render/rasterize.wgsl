@@ -1,7 +1,9 @@
 // Last pass of the renderer: one workgroup per 16×16 tile. Each invocation composites a
 // column of 4·QUADS pixels (one `Quad` is four pixels, one vector lane each), so that every
 // Gaussian read from workgroup memory is blended into several pixels at once. The tile's
-// Gaussians (front to back) are loaded into workgroup memory BATCH at a time and
+// Gaussians (front to back) are loaded into workgroup memory BATCH at a time; each 8×8
+// block of the tile then keeps a bit mask of the batch's Gaussians that can reach one of
+// its pixels, and its invocations walk only those (`block_masks`). They are
 // composited with α = min(0.99, ω · exp(−½ Δᵀ Σ'⁻¹ Δ)), skipping α < 1/255 and stopping
 // a pixel once its transmittance would fall below 1e-4 (docs/method.md §7). Pixel (i, j)
 // is sampled at (i + 0.5, j + 0.5). Mirrors `render::cpu::render`.
@@ -17,10 +19,18 @@
 const COLUMN: u32 = 4u * QUADS;
 const THREADS: u32 = TILE * TILE / COLUMN;
 const BATCH: u32 = 256u;
+// Blocks of BLOCK×BLOCK pixels with a Gaussian mask each; a column lies within one block.
+const BLOCK: u32 = 8u;
+const BLOCKS_X: u32 = TILE / BLOCK;
+const WORDS: u32 = BATCH / 32u;
+const_assert BLOCK % COLUMN == 0u;
 
+// xy: mean, z: opacity, w: the squared Mahalanobis radius beyond which α < MIN_ALPHA
 var<workgroup> batch_xy_opacity: array<vec4<f32>, BATCH>;
 var<workgroup> batch_conic: array<vec4<f32>, BATCH>;
 var<workgroup> batch_color: array<vec4<f32>, BATCH>;
+// Bit i of word w of block b: batch Gaussian 32w + i reaches a pixel of block b.
+var<workgroup> block_masks: array<u32, BLOCKS_X * BLOCKS_X * WORDS>;
 // pixels of the tile that are done (saturated or outside the image)
 var<workgroup> finished: atomic<u32>;
 var<workgroup> stop_flag: u32;
@@ -67,6 +77,33 @@ fn column_power(xo: vec4<f32>, con: vec4<f32>, centre_x: f32) -> vec3<f32> {
     return vec3<f32>(-0.5 * con.x * dx * dx, -con.y * dx, -0.5 * con.z);
 }
 
+// dᵀ C d up to which α = ω exp(−½ dᵀ C d) ≥ MIN_ALPHA, widened a little so that rounding
+// never drops a pixel that `blend` would composite. Unlike the tile keys' extent this is not
+// clamped to 3σ: every pixel of a listed tile that `blend` takes must stay in.
+fn alpha_reach2(opacity: f32) -> f32 {
+    return 2.0 * log(opacity / MIN_ALPHA) * 1.001 + 1e-3;
+}
+
+// Which of the batch's `count` Gaussians reach a pixel centre of each block, a word of
+// the mask per invocation (`block_masks`).
+fn mark_blocks(lid: u32, count: u32, tile_origin: vec2<u32>) {
+    for (var j = lid; j < BLOCKS_X * BLOCKS_X * WORDS; j += THREADS) {
+        let block = j / WORDS;
+        let w = j % WORDS;
+        let corner = tile_origin + BLOCK * vec2<u32>(block % BLOCKS_X, block / BLOCKS_X);
+        let lo = vec2<f32>(corner) + 0.5;
+        let first = w * 32u;
+        let n = min(32u, count - min(count, first));
+        var bits = 0u;
+        for (var i = 0u; i < n; i++) {
+            let xo = batch_xy_opacity[first + i];
+            let reach = ellipse_touches_square(xo.xy, batch_conic[first + i].xyz, xo.w, lo, f32(BLOCK - 1u));
+            bits |= u32(reach) << i;
+        }
+        block_masks[j] = bits;
+    }
+}
+
 // Pixels of the invocation still compositing.
 fn live_pixels(quads: array<Quad, QUADS>) -> u32 {
     var n = 0u;
@@ -79,8 +116,10 @@ fn live_pixels(quads: array<Quad, QUADS>) -> u32 {
 @compute @workgroup_size(THREADS)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) lid: u32) {
     let tile = wid.y * frame.tiles_x + wid.x;
-    let x = wid.x * TILE + lid % TILE;
-    let y0 = wid.y * TILE + (lid / TILE) * COLUMN;
+    let tile_origin = wid.xy * TILE;
+    let x = tile_origin.x + lid % TILE;
+    let y0 = tile_origin.y + (lid / TILE) * COLUMN;
+    let block = (lid % TILE) / BLOCK + BLOCKS_X * ((lid / TILE) * COLUMN / BLOCK);
     if lid == 0u {
         atomicStore(&finished, 0u);
         tile_range = ranges[tile];
@@ -111,23 +150,34 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         let count = min(BATCH, range.y - start);
         for (var i = lid; i < count; i += THREADS) {
             let p = projected_at(tile_values[start + i]);
-            batch_xy_opacity[i] = p.xy_opacity;
+            batch_xy_opacity[i] = vec4<f32>(p.xy_opacity.xyz, alpha_reach2(p.xy_opacity.z));
             batch_conic[i] = p.conic;
             batch_color[i] = p.color;
         }
+        workgroupBarrier();
+        mark_blocks(lid, count, tile_origin);
         workgroupBarrier();
         // Pixels that saturate are counted once per batch, not per Gaussian: the early
         // stop is only checked between batches.
         let live_before = live_pixels(quads);
         var live = live_before > 0u;
-        for (var k = 0u; k < count && live; k++) {
-            let xo = batch_xy_opacity[k];
-            let p = column_power(xo, batch_conic[k], centre_x);
-            let color = batch_color[k].rgb;
-            live = false;
-            for (var q = 0u; q < QUADS; q++) {
-                quads[q] = blend(quads[q], xo, p, color);
-                live = live || any(quads[q].live);
+        for (var w = 0u; w < WORDS && live; w++) {
+            // Set bits in increasing order keep the batch front to back.
+            var bits = block_masks[block * WORDS + w];
+            loop {
+                if bits == 0u || !live {
+                    break;
+                }
+                let k = w * 32u + firstTrailingBit(bits);
+                bits &= bits - 1u;
+                let xo = batch_xy_opacity[k];
+                let p = column_power(xo, batch_conic[k], centre_x);
+                let color = batch_color[k].rgb;
+                live = false;
+                for (var q = 0u; q < QUADS; q++) {
+                    quads[q] = blend(quads[q], xo, p, color);
+                    live = live || any(quads[q].live);
+                }
             }
         }
         let saturated = live_before - live_pixels(quads);
