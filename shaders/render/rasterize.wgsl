@@ -7,7 +7,8 @@
 // composited with α = min(0.99, ω · exp(−½ Δᵀ Σ'⁻¹ Δ)), skipping α < 1/255 and stopping
 // a pixel once its transmittance would fall below 1e-4 (docs/method.md §7). Pixel (i, j)
 // is sampled at (i + 0.5, j + 0.5). Mirrors `render::cpu::render`.
-// QUADS (and so the workgroup size, THREADS) is set per adapter by `passes::Rasterize`.
+// QUADS (and so the workgroup size, THREADS) is set per adapter by `passes::Rasterize`, and
+// so is `read_splat`, how the invocations of a block read a Gaussian from the batch.
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
@@ -25,16 +26,23 @@ const BLOCKS_X: u32 = TILE / BLOCK;
 const WORDS: u32 = BATCH / 32u;
 const_assert BLOCK % COLUMN == 0u;
 
-// xy: mean, z: opacity, w: the squared Mahalanobis radius beyond which α < MIN_ALPHA
-var<workgroup> batch_xy_opacity: array<vec4<f32>, BATCH>;
-var<workgroup> batch_conic: array<vec4<f32>, BATCH>;
-var<workgroup> batch_color: array<vec4<f32>, BATCH>;
+// Batch Gaussian k is the three vectors from 3k (`Splat2D`).
+var<workgroup> batch: array<vec4<f32>, 3 * BATCH>;
 // Bit i of word w of block b: batch Gaussian 32w + i reaches a pixel of block b.
 var<workgroup> block_masks: array<u32, BLOCKS_X * BLOCKS_X * WORDS>;
 // pixels of the tile that are done (saturated or outside the image)
 var<workgroup> finished: atomic<u32>;
 var<workgroup> stop_flag: u32;
 var<workgroup> tile_range: vec2<u32>;
+
+// A projected Gaussian as the batch holds it.
+struct Splat2D {
+    // xy: mean, z: opacity, w: the squared Mahalanobis radius beyond which α < MIN_ALPHA
+    xy_opacity: vec4<f32>,
+    // (a, b, c) of the conic [[a, b], [b, c]]
+    conic: vec4<f32>,
+    color: vec4<f32>,
+}
 
 // Four pixels of a column, front-to-back state of each.
 struct Quad {
@@ -96,8 +104,9 @@ fn mark_blocks(lid: u32, count: u32, tile_origin: vec2<u32>) {
         let n = min(32u, count - min(count, first));
         var bits = 0u;
         for (var i = 0u; i < n; i++) {
-            let xo = batch_xy_opacity[first + i];
-            let reach = ellipse_touches_square(xo.xy, batch_conic[first + i].xyz, xo.w, lo, f32(BLOCK - 1u));
+            let xo = batch[3u * (first + i)];
+            let conic = batch[3u * (first + i) + 1u].xyz;
+            let reach = ellipse_touches_square(xo.xy, conic, xo.w, lo, f32(BLOCK - 1u));
             bits |= u32(reach) << i;
         }
         block_masks[j] = bits;
@@ -150,9 +159,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         let count = min(BATCH, range.y - start);
         for (var i = lid; i < count; i += THREADS) {
             let p = projected_at(tile_values[start + i]);
-            batch_xy_opacity[i] = vec4<f32>(p.xy_opacity.xyz, alpha_reach2(p.xy_opacity.z));
-            batch_conic[i] = p.conic;
-            batch_color[i] = p.color;
+            batch[3u * i] = vec4<f32>(p.xy_opacity.xyz, alpha_reach2(p.xy_opacity.z));
+            batch[3u * i + 1u] = p.conic;
+            batch[3u * i + 2u] = p.color;
         }
         workgroupBarrier();
         mark_blocks(lid, count, tile_origin);
@@ -161,18 +170,19 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         // stop is only checked between batches.
         let live_before = live_pixels(quads);
         var live = live_before > 0u;
-        for (var w = 0u; w < WORDS && live; w++) {
+        for (var w = 0u; w < WORDS && any_live(live); w++) {
             // Set bits in increasing order keep the batch front to back.
             var bits = block_masks[block * WORDS + w];
             loop {
-                if bits == 0u || !live {
+                if bits == 0u || !any_live(live) {
                     break;
                 }
                 let k = w * 32u + firstTrailingBit(bits);
                 bits &= bits - 1u;
-                let xo = batch_xy_opacity[k];
-                let p = column_power(xo, batch_conic[k], centre_x);
-                let color = batch_color[k].rgb;
+                let splat = read_splat(k, lid);
+                let xo = splat.xy_opacity;
+                let p = column_power(xo, splat.conic, centre_x);
+                let color = splat.color.rgb;
                 live = false;
                 for (var q = 0u; q < QUADS; q++) {
                     quads[q] = blend(quads[q], xo, p, color);

@@ -134,6 +134,7 @@ pub struct GpuRenderer {
     lighting: Option<Lighting>,
     /// The workgroup shapes the sort and the rasteriser were built for.
     executor: Executor,
+    splat_reads: passes::SplatReads,
 }
 
 #[derive(Default)]
@@ -211,11 +212,12 @@ impl GpuRenderer {
     /// (the images are the same; tests check that on one adapter).
     pub fn with_executor(gpu: &GpuContext, executor: Executor) -> GpuRenderer {
         let device = &gpu.device;
+        let splat_reads = passes::SplatReads::for_adapter(gpu, executor);
         GpuRenderer {
             project: passes::Project::new(device),
             tile_keys: passes::TileKeys::new(device, 1),
             tile_ranges: Ranges::new(device),
-            rasterize: passes::Rasterize::new(device, 1, executor),
+            rasterize: passes::Rasterize::new(device, 1, executor, splat_reads),
             sort: RadixSort::new(device, executor),
             scan: Scan::new(device),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
@@ -239,6 +241,7 @@ impl GpuRenderer {
             profile: false,
             lighting: None,
             executor,
+            splat_reads,
         }
     }
 
@@ -364,7 +367,8 @@ impl GpuRenderer {
         if self.tile_keys.pages != pages.count {
             // The passes that read projections in any order declare one binding per page.
             self.tile_keys = passes::TileKeys::new(&gpu.device, pages.count);
-            self.rasterize = passes::Rasterize::new(&gpu.device, pages.count, self.executor);
+            self.rasterize =
+                passes::Rasterize::new(&gpu.device, pages.count, self.executor, self.splat_reads);
         }
         let device = &gpu.device;
         let (gaussians, words) = layout::pack_splats(splats);

@@ -3,7 +3,7 @@
 
 use super::{shader_source, COMMON, SH};
 use crate::gpu::pages::wgsl_paged_reader;
-use crate::gpu::{Executor, Kernel, Shader};
+use crate::gpu::{Executor, GpuContext, Kernel, Shader};
 
 /// The first binding number of the projected Gaussians' pages in the passes that read
 /// them in any order (tile keys, rasterize), after their other bindings; they are bound by
@@ -80,13 +80,54 @@ pub fn rasterize_quads(executor: Executor) -> u32 {
     }
 }
 
+/// How the rasteriser's invocations read a Gaussian from the batch in workgroup memory
+/// (`read_splat`, `shaders/render/splat_reads/`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SplatReads {
+    /// Every invocation reads the whole Gaussian (`each.wgsl`).
+    Each,
+    /// Each lane of a subgroup reads one element and the subgroup broadcasts them
+    /// (`spread.wgsl`): for CPU drivers, which read workgroup memory at a per-invocation
+    /// index one lane and one element at a time.
+    Spread,
+}
+
+impl SplatReads {
+    /// `Spread` where a subgroup is exactly one 8×8 block's eight columns: the CPU shape
+    /// (8-pixel columns) on an adapter whose subgroups are always 8 invocations
+    /// (lavapipe, which groups consecutive invocations into one SIMD vector).
+    pub fn for_adapter(gpu: &GpuContext, executor: Executor) -> SplatReads {
+        let eight = gpu.info.subgroup_min_size == 8 && gpu.info.subgroup_max_size == 8;
+        if executor == Executor::Cpu && gpu.features.subgroups && eight {
+            SplatReads::Spread
+        } else {
+            SplatReads::Each
+        }
+    }
+
+    fn source(self) -> &'static str {
+        match self {
+            SplatReads::Each => include_str!("../../../shaders/render/splat_reads/each.wgsl"),
+            SplatReads::Spread => {
+                include_str!("../../../shaders/render/splat_reads/spread.wgsl")
+            }
+        }
+    }
+}
+
 impl Rasterize {
-    pub fn new(device: &wgpu::Device, pages: u32, executor: Executor) -> Rasterize {
+    pub fn new(
+        device: &wgpu::Device,
+        pages: u32,
+        executor: Executor,
+        reads: SplatReads,
+    ) -> Rasterize {
         let quads = format!("const QUADS: u32 = {}u;", rasterize_quads(executor));
         let src = shader_source(&[
             &quads,
             COMMON,
             include_str!("../../../shaders/render/rasterize.wgsl"),
+            reads.source(),
             &projected_reader(pages),
         ]);
         Rasterize {
