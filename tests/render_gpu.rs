@@ -47,6 +47,19 @@ fn camera(width: u32, height: u32) -> Camera {
     )
 }
 
+/// A camera at distance `z` on the −z axis looking at the origin, y up, 40° field of view,
+/// `size`×`size` pixels.
+fn facing_camera(z: f32, size: u32) -> Camera {
+    Camera::look_at(
+        Vec3::new(0.0, 0.0, -z),
+        Vec3::ZERO,
+        Vec3::Y,
+        40f32.to_radians(),
+        size,
+        size,
+    )
+}
+
 #[test]
 fn gpu_matches_cpu_reference_on_random_scenes() {
     for gpu in gpus() {
@@ -95,15 +108,8 @@ fn isotropic_gaussian_has_the_analytic_profile() {
             sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
             ..Default::default()
         };
-        // Camera on the −z axis looking at the origin; 64×64 so the mean is at pixel (32, 32).
-        let cam = Camera::look_at(
-            Vec3::new(0.0, 0.0, -z),
-            Vec3::ZERO,
-            Vec3::Y,
-            40f32.to_radians(),
-            64,
-            64,
-        );
+        // 64×64 so the mean is at pixel (32, 32).
+        let cam = facing_camera(z, 64);
         renderer.upload(&gpu, &splats).unwrap();
         let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
         let s2 = (cam.fx * sigma / z).powi(2) + 0.3;
@@ -396,14 +402,7 @@ fn block_masks_keep_every_pixel_a_gaussian_reaches() {
             splats.sh.extend(sh::rgb_to_dc(rgb));
         }
         let splats = f16_rounded(splats);
-        let cam = Camera::look_at(
-            Vec3::new(0.0, 0.0, -2.0),
-            Vec3::ZERO,
-            Vec3::Y,
-            40f32.to_radians(),
-            128,
-            128,
-        );
+        let cam = facing_camera(2.0, 128);
         renderer.upload(&gpu, &splats).unwrap();
         let image = renderer.render(&gpu, &cam, Vec3::ZERO).unwrap();
         let reference = cpu::render(&splats, &cam, Vec3::ZERO);
