@@ -4,7 +4,9 @@
 # code when the pipelines go, so this script samples the run with perf while copying the
 # anonymous executable mappings of it and its child processes every few seconds (gdb),
 # then disassembles the hottest addresses from whichever copy holds them. Short runs need
-# a short interval (-i 1): code freed between two copies cannot be shown.
+# a short interval (-i 1): code freed between two copies cannot be shown, and an address
+# that a later kernel reused shows that later kernel (each run of a benchmark case may
+# compile its kernels anew at the same addresses).
 #
 #   benches/profile/jit_hotspots.sh [-n TOP] [-i SECONDS] -- COMMAND [ARGS...]
 #   e.g. benches/profile/jit_hotspots.sh -i 1 -- target/release/splatter bench render --quick
@@ -81,7 +83,8 @@ perf report -i "$dir/perf.data" --no-children --sort sym 2> /dev/null |
       if (( a >= start && a < start + size )); then
         echo "(from $file)"
         objdump -D -b binary -m i386:x86-64 --adjust-vma=$start "$file" |
-          grep -B 16 -A 6 "^ *$(printf '%x' $a):" | cut -f1,3
+          grep -B 16 -A 6 "^ *$(printf '%x' $a):" | cut -f1,3 ||
+          echo "(no instruction starts there in this copy: the code was replaced)"
         found=yes
         break
       fi
