@@ -69,8 +69,8 @@ done
 wait $recorder || true
 echo "run log: $dir/run.log"
 
-# perf's samples name threads, not processes, so a copy is found by address alone (the
-# latest copy that holds it).
+# perf's samples name threads, not processes, so a copy is found by address alone: the
+# latest copy that holds the address with an instruction starting at it.
 perf report -i "$dir/perf.data" --no-children --sort sym 2> /dev/null |
   awk '$2 == "[.]" && $3 ~ /^0x/ {print $1, $3}' | head -n "$top" |
   while read -r share address; do
@@ -80,14 +80,15 @@ perf report -i "$dir/perf.data" --no-children --sort sym 2> /dev/null |
     for file in $(ls -t "$dir"/code/*.bin 2> /dev/null); do
       start=${file##*-}; start=$((16#${start%.bin}))
       size=$(stat -c %s "$file")
-      if (( a >= start && a < start + size )); then
+      (( a >= start && a < start + size )) || continue
+      listing=$(objdump -D -b binary -m i386:x86-64 --adjust-vma=$start "$file" |
+        grep -B 16 -A 6 "^ *$(printf '%x' $a):" | cut -f1,3 || true)
+      if [[ -n $listing ]]; then
         echo "(from $file)"
-        objdump -D -b binary -m i386:x86-64 --adjust-vma=$start "$file" |
-          grep -B 16 -A 6 "^ *$(printf '%x' $a):" | cut -f1,3 ||
-          echo "(no instruction starts there in this copy: the code was replaced)"
+        echo "$listing"
         found=yes
         break
       fi
     done
-    [[ $found == yes ]] || echo "(in no copy: the code was freed before a snapshot; try a smaller -i)"
+    [[ $found == yes ]] || echo "(in no copy: the code was freed or replaced before a snapshot; try a smaller -i)"
   done
