@@ -134,7 +134,6 @@ pub struct GpuRenderer {
     lighting: Option<Lighting>,
     /// The workgroup shapes the sort and the rasteriser were built for.
     executor: Executor,
-    splat_reads: passes::SplatReads,
 }
 
 #[derive(Default)]
@@ -212,12 +211,11 @@ impl GpuRenderer {
     /// (the images are the same; tests check that on one adapter).
     pub fn with_executor(gpu: &GpuContext, executor: Executor) -> GpuRenderer {
         let device = &gpu.device;
-        let splat_reads = passes::SplatReads::for_adapter(gpu, executor);
         GpuRenderer {
             project: passes::Project::new(device),
             tile_keys: passes::TileKeys::new(device, 1),
             tile_ranges: Ranges::new(device),
-            rasterize: passes::Rasterize::new(device, 1, executor, splat_reads),
+            rasterize: passes::Rasterize::new(gpu, 1, executor),
             sort: RadixSort::new(device, executor),
             scan: Scan::new(device),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
@@ -241,7 +239,6 @@ impl GpuRenderer {
             profile: false,
             lighting: None,
             executor,
-            splat_reads,
         }
     }
 
@@ -367,8 +364,7 @@ impl GpuRenderer {
         if self.tile_keys.pages != pages.count {
             // The passes that read projections in any order declare one binding per page.
             self.tile_keys = passes::TileKeys::new(&gpu.device, pages.count);
-            self.rasterize =
-                passes::Rasterize::new(&gpu.device, pages.count, self.executor, self.splat_reads);
+            self.rasterize = passes::Rasterize::new(gpu, pages.count, self.executor);
         }
         let device = &gpu.device;
         let (gaussians, words) = layout::pack_splats(splats);

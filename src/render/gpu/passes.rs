@@ -116,12 +116,9 @@ impl SplatReads {
 }
 
 impl Rasterize {
-    pub fn new(
-        device: &wgpu::Device,
-        pages: u32,
-        executor: Executor,
-        reads: SplatReads,
-    ) -> Rasterize {
+    /// For `executor`'s workgroup shape, with the reads that shape allows on `gpu`.
+    pub fn new(gpu: &GpuContext, pages: u32, executor: Executor) -> Rasterize {
+        let reads = SplatReads::for_adapter(gpu, executor);
         let quads = format!("const QUADS: u32 = {}u;", rasterize_quads(executor));
         let src = shader_source(&[
             &quads,
@@ -131,7 +128,7 @@ impl Rasterize {
             &projected_reader(pages),
         ]);
         Rasterize {
-            kernel: Kernel::new(device, "rasterize", &src, "main"),
+            kernel: Kernel::new(&gpu.device, "rasterize", &src, "main"),
         }
     }
 }
