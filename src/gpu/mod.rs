@@ -254,6 +254,15 @@ impl GpuContext {
         Executor::of(&self.info)
     }
 
+    /// Whether this adapter is a CPU driver whose subgroups are always 8 invocations, one
+    /// SIMD vector (lavapipe with 256-bit vectors): the passes that hand values between
+    /// lanes with `subgroupBroadcast` instead of each lane reading them (the rasteriser's
+    /// splat reads, the simulation's P2G) are built for that shape.
+    pub fn cpu_subgroups_of_eight(&self) -> bool {
+        let eight = self.info.subgroup_min_size == 8 && self.info.subgroup_max_size == 8;
+        self.executor() == Executor::Cpu && self.features.subgroups && eight
+    }
+
     /// One line naming the adapter, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Cpu, Vulkan)`.
     pub fn describe(&self) -> String {
         describe(&self.info)

@@ -266,7 +266,7 @@ impl GpuSim {
             P2gPath::Fixed => Some(Scatter::Fixed),
         };
         let used = crate::sim::models::ModelsUsed::of(materials);
-        let passes = Passes::new(device, gpu.executor(), (scatter, separation), &used);
+        let passes = Passes::new(gpu, (scatter, separation), &used);
         let x_mass: Vec<[f32; 4]> = (0..particles.len())
             .map(|p| {
                 particles.x[p]

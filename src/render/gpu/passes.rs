@@ -97,8 +97,7 @@ impl SplatReads {
     /// (8-pixel columns) on an adapter whose subgroups are always 8 invocations
     /// (lavapipe, which groups consecutive invocations into one SIMD vector).
     pub fn for_adapter(gpu: &GpuContext, executor: Executor) -> SplatReads {
-        let eight = gpu.info.subgroup_min_size == 8 && gpu.info.subgroup_max_size == 8;
-        if executor == Executor::Cpu && gpu.features.subgroups && eight {
+        if executor == Executor::Cpu && gpu.cpu_subgroups_of_eight() {
             SplatReads::Spread
         } else {
             SplatReads::Each

@@ -44,6 +44,7 @@ pub mod layout;
 mod mark_blocks;
 mod mark_particles;
 mod p2g;
+mod p2g_broadcast;
 mod p2g_fixed;
 mod p2g_scatter;
 mod pass;
@@ -60,6 +61,7 @@ pub(crate) use grid_from_sums::GridFromSums;
 pub(crate) use mark_blocks::MarkBlocks;
 pub(crate) use mark_particles::MarkParticles;
 pub(crate) use p2g::P2gGather;
+pub(crate) use p2g_broadcast::P2gBroadcast;
 pub(crate) use p2g_fixed::P2gFixed;
 pub(crate) use p2g_scatter::P2gScatter;
 pub(crate) use pass::{BindAt, Bound, Extent, StepPass};
@@ -70,7 +72,7 @@ pub(crate) use sort_cells::SortCells;
 use crate::gpu::pages::PageRanges;
 use crate::gpu::sort::SortPlan;
 use crate::gpu::stages::Stage;
-use crate::gpu::{Executor, Kernel};
+use crate::gpu::{GpuContext, Kernel};
 use crate::sim::models::ModelsUsed;
 
 /// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
@@ -301,11 +303,12 @@ impl Passes {
     /// two-field separation's with `separation` (on the gather path). This is the
     /// algorithm of the module's documentation; a new pass goes in here.
     pub fn new(
-        device: &wgpu::Device,
-        executor: Executor,
+        gpu: &GpuContext,
         (scatter, separation): (Option<Scatter>, bool),
         used: &ModelsUsed,
     ) -> Passes {
+        let device = &gpu.device;
+        let executor = gpu.executor();
         let atomic = scatter.is_some();
         let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, atomic, used))];
         match scatter {
@@ -331,7 +334,11 @@ impl Passes {
                     passes.push(Box::new(DamageGradient::new(device)));
                     passes.push(Box::new(Ridge::new(device)));
                 }
-                passes.push(Box::new(P2gGather::new(device, separation)));
+                if !separation && gpu.cpu_subgroups_of_eight() {
+                    passes.push(Box::new(P2gBroadcast::new(device)));
+                } else {
+                    passes.push(Box::new(P2gGather::new(device, separation)));
+                }
             }
         }
         passes.push(Box::new(G2p::new(device, (atomic, separation), used)));
