@@ -309,7 +309,7 @@ fn resume_refuses_foreign_or_damaged_checkpoints() {
 }
 
 /// Two deterministic runs of the fracture scene (NACC, 4224 particles moving 33k Gaussians)
-/// give byte-identical frames on the same adapter.
+/// give byte-identical frames on the same adapter, on whichever deterministic path it takes.
 #[test]
 fn deterministic_fracture_runs_are_byte_identical() {
     let dir = TempDir::new().unwrap();
@@ -334,8 +334,10 @@ fn deterministic_fracture_runs_are_byte_identical() {
             ],
         );
         expect_success(&o);
+        // The fixed-point scatter, or on CPU drivers the gather by subgroups.
+        let err = stderr(&o);
         assert!(
-            stderr(&o).contains("P2G fixed (deterministic)"),
+            err.contains("P2G fixed (deterministic)") || err.contains("P2G gather (deterministic)"),
             "{}",
             describe(&o)
         );

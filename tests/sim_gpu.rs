@@ -598,50 +598,53 @@ fn gpu_step_over_pages_matches_the_cpu_reference() {
     }
 }
 
-/// The fixed-point scatter sums in integers, whose addition is associative: two runs of the
-/// NACC sphere's impact (many particles adding to each node from several threads, in an
-/// order that differs between runs) end in the same bits, in every particle's position,
-/// velocity, F and α.
+/// Both deterministic paths end two runs of the NACC sphere's impact in the same bits, in
+/// every particle's position, velocity, F and α: the fixed-point scatter sums in integers,
+/// whose addition is associative (many particles add to each node from several threads, in
+/// an order that differs between runs), and the gather sums each node in the sorted order.
 #[test]
-fn gpu_fixed_point_path_is_bitwise_deterministic() {
+fn gpu_deterministic_paths_end_two_runs_in_the_same_bits() {
     let scene = nacc_sphere();
     for gpu in gpus() {
-        let run = || {
-            let grid = Grid::new(scene.grid_lo, scene.grid_hi, scene.dx);
-            let sim = GpuSim::with_path(
-                &gpu,
-                &scene.particles,
-                &grid,
-                &scene.materials,
-                &scene.params,
-                P2gPath::Fixed,
-            )
-            .unwrap();
-            sim.step(&gpu, 60).unwrap();
-            sim.step(&gpu, 60).unwrap();
-            sim.read_particles(&gpu, &scene.particles).unwrap()
-        };
-        let (a, b) = (run(), run());
-        let bits = |p: &Particles| -> Vec<u64> {
-            let mut v: Vec<f64> = Vec::new();
-            for i in 0..p.len() {
-                v.extend(p.x[i].to_array());
-                v.extend(p.v[i].to_array());
-                v.extend(p.f[i].to_cols_array());
-                v.push(p.alpha[i]);
-            }
-            v.iter().map(|x| x.to_bits()).collect()
-        };
-        let differ = bits(&a)
-            .iter()
-            .zip(bits(&b))
-            .filter(|(x, y)| **x != *y)
-            .count();
-        eprintln!(
-            "{}: fixed-point P2G, NACC sphere, 120 steps twice: {differ} values differ",
-            gpu.describe()
-        );
-        assert_eq!(differ, 0, "two runs of the fixed-point path differ");
+        for path in [P2gPath::Fixed, P2gPath::Gather] {
+            let run = || {
+                let grid = Grid::new(scene.grid_lo, scene.grid_hi, scene.dx);
+                let sim = GpuSim::with_path(
+                    &gpu,
+                    &scene.particles,
+                    &grid,
+                    &scene.materials,
+                    &scene.params,
+                    path,
+                )
+                .unwrap();
+                sim.step(&gpu, 60).unwrap();
+                sim.step(&gpu, 60).unwrap();
+                sim.read_particles(&gpu, &scene.particles).unwrap()
+            };
+            let (a, b) = (run(), run());
+            let bits = |p: &Particles| -> Vec<u64> {
+                let mut v: Vec<f64> = Vec::new();
+                for i in 0..p.len() {
+                    v.extend(p.x[i].to_array());
+                    v.extend(p.v[i].to_array());
+                    v.extend(p.f[i].to_cols_array());
+                    v.push(p.alpha[i]);
+                }
+                v.iter().map(|x| x.to_bits()).collect()
+            };
+            let differ = bits(&a)
+                .iter()
+                .zip(bits(&b))
+                .filter(|(x, y)| **x != *y)
+                .count();
+            eprintln!(
+                "{}: {} P2G, NACC sphere, 120 steps twice: {differ} values differ",
+                gpu.describe(),
+                path.name()
+            );
+            assert_eq!(differ, 0, "two runs of the {} path differ", path.name());
+        }
     }
 }
 

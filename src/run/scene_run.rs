@@ -63,7 +63,9 @@ pub(super) fn execute(
     let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
     let p2g = match &setup {
-        Some(s) if opts.deterministic => P2gPath::deterministic_for(&s.params),
+        Some(s) if opts.deterministic => {
+            P2gPath::deterministic_for(gpu, &s.params, s.particles.len())
+        }
         Some(s) => P2gPath::for_params(gpu, &s.params),
         None => P2gPath::best(gpu),
     };

@@ -38,10 +38,16 @@ impl P2gPath {
         }
     }
 
-    /// The fastest deterministic path that runs `params`: the gather for two-field
-    /// separation (the scatter paths have one field), else the fixed-point scatter.
-    pub fn deterministic_for(params: &StepParams) -> P2gPath {
-        if params.separation != crate::sim::Separation::None {
+    /// The fastest deterministic path that runs `params` for `particles` particles on
+    /// `gpu`: the gather for two-field separation (the scatter paths have one field), and
+    /// where P2G gathers by subgroups ([`GpuContext::cpu_subgroups_of_eight`]: CPU drivers,
+    /// on which the fixed-point scatter's integer atomics run one lane at a time) with the
+    /// particles in one storage binding; else the fixed-point scatter.
+    pub fn deterministic_for(gpu: &GpuContext, params: &StepParams, particles: usize) -> P2gPath {
+        let one_page = super::GpuSim::pages_for(gpu, particles).count == 1;
+        if params.separation != crate::sim::Separation::None
+            || (gpu.cpu_subgroups_of_eight() && one_page)
+        {
             P2gPath::Gather
         } else {
             P2gPath::Fixed
