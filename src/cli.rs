@@ -291,7 +291,8 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     pub(crate) resume: bool,
     /// Bit-identical frames for the same input on the same adapter: the simulation sums
-    /// P2G in a fixed order (sorted gather) instead of with float atomics.
+    /// P2G in integers (fixed point) or in a fixed order (the sorted gather: with two-field
+    /// separation, and on CPU drivers), instead of with float atomics.
     #[arg(long)]
     pub(crate) deterministic: bool,
     /// Save the simulation state to OUT_DIR/checkpoint.bin every N frames (0: never).
