@@ -356,10 +356,8 @@ fn manifest_describes_the_run() {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
     write(d, "sim.json", &sim_scene(3, 200.0));
-    expect_success(&splatter(
-        d,
-        &["render", "sim.json", "--out", "o", "--deterministic"],
-    ));
+    let o = splatter(d, &["render", "sim.json", "--out", "o", "--deterministic"]);
+    expect_success(&o);
     let m = manifest(&d.join("o"));
     assert_eq!(m["status"], "complete");
     assert_eq!(m["program"], "splatter");
@@ -372,7 +370,15 @@ fn manifest_describes_the_run() {
         (64.into(), 48.into())
     );
     assert_eq!(s["deterministic"], true);
-    assert_eq!(s["p2g"], "fixed");
+    // A deterministic path (the fixed-point scatter, or the gather on CPU drivers), the
+    // one the log names.
+    let p2g = s["p2g"].as_str().unwrap();
+    assert!(p2g == "fixed" || p2g == "gather", "{p2g}");
+    assert!(
+        stderr(&o).contains(&format!("P2G {p2g} (deterministic)")),
+        "{}",
+        describe(&o)
+    );
     assert_eq!(s["steps_per_frame"], 25);
     assert_eq!(s["particles"], 125);
     let frames = m["frames"].as_object().unwrap();

@@ -180,6 +180,18 @@ fn no_cell_key() -> u32 {
     return bc.x * bc.y * bc.z;
 }
 
+// The sort key of a particle at x on the gather path: its base cell (x fastest), or
+// no_cell_key() when its stencil is off the grid (prepare.wgsl, g2p.wgsl).
+fn cell_key(x: vec3<f32>) -> u32 {
+    let st = grid_stencil(x);
+    if !st.ok {
+        return no_cell_key();
+    }
+    let bc = consts.cells - 1u;
+    let b = vec3<u32>(st.s.base);
+    return b.x + bc.x * (b.y + bc.y * b.z);
+}
+
 // The stencil of x when its 3×3×3 nodes all lie on the grid (mirrors `cpu::Grid::stencil`).
 struct GridStencil {
     ok: bool,

@@ -19,10 +19,12 @@
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
 // [3] steps since the last read (compact_blocks.wgsl). Read and cleared once per frame.
 @group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 4>;
-// The next step's affine term (common.wgsl, affine_term), written when NEXT_AFFINE (a
-// constant G2p prepends: the atomic path, whose steps then skip the prepare pass; the
-// gather path's prepare runs every step for the sort keys and computes it there).
+// What prepare.wgsl would compute for the next step, so that only the first step of a
+// submission runs it: the affine term (common.wgsl, affine_term), and on the gather path
+// (NEXT_KEYS, a constant G2p prepends) the base-cell sort key and the particle's index.
 @group(0) @binding(9) var<storage, read_write> affine: array<mat3x3<f32>>;
+@group(0) @binding(17) var<storage, read_write> cell_keys: array<u32>;
+@group(0) @binding(18) var<storage, read_write> cell_values: array<u32>;
 
 // Two-field separation only (step/separation.wgsl): ∇D_p per particle, the ridge gradient
 // per pool node, and the far field (velocity xyz, mass w; then the velocity change) per
@@ -30,6 +32,14 @@
 @group(0) @binding(10) var<storage, read> damage_gradient: array<vec4<f32>>;
 @group(0) @binding(11) var<storage, read> ridge: array<vec4<f32>>;
 @group(0) @binding(12) var<storage, read> far_field: array<vec4<f32>>;
+
+// The next step's sort key and value of particle p at x (as prepare.wgsl).
+fn leave_key(p: u32, x: vec3<f32>) {
+    if NEXT_KEYS {
+        cell_values[p] = page.base + p;
+        cell_keys[p] = cell_key(x);
+    }
+}
 
 fn count_failure(slot: u32) {
     atomicAdd(&flags[slot], 1u);
@@ -56,11 +66,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         }
         let v = vv.xyz + consts.gravity * consts.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
-        x_mass[p] = vec4<f32>(xm.xyz + v * consts.dt, xm.w);
-        if NEXT_AFFINE {
-            affine[p] = affine_term(particle_material(material[p]), deformation[p], alpha[p],
-                                    affine_velocity[p], xm.w, vv.w);
-        }
+        let x = xm.xyz + v * consts.dt;
+        x_mass[p] = vec4<f32>(x, xm.w);
+        affine[p] = affine_term(particle_material(material[p]), deformation[p], alpha[p],
+                                affine_velocity[p], xm.w, vv.w);
+        leave_key(p, x);
         return;
     }
     let s = st.s;
@@ -106,15 +116,15 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     v_volume[p] = vec4<f32>(v_new, vv.w);
     affine_velocity[p] = c;
-    x_mass[p] = vec4<f32>(xm.xyz + vp * consts.dt, xm.w);
+    let x = xm.xyz + vp * consts.dt;
+    x_mass[p] = vec4<f32>(x, xm.w);
+    leave_key(p, x);
     let m = particle_material(material[p]);
     let plastic = material_plasticity(m, f_trial, alpha[p]);
     let f_new = plastic.f;
     alpha[p] = plastic.alpha;
     deformation[p] = f_new;
-    if NEXT_AFFINE {
-        affine[p] = affine_term(m, f_new, plastic.alpha, c, xm.w, vv.w);
-    }
+    affine[p] = affine_term(m, f_new, plastic.alpha, c, xm.w, vv.w);
     if !(sim_is_finite3(v_new) && sim_is_finite_mat3(f_new)) {
         count_failure(0u);
     }

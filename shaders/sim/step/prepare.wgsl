@@ -1,8 +1,8 @@
 // P2G, part 1 (per particle): the particle's base cell as a sort key, and its affine
 // momentum term affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ(F_p) (docs/method.md §2 step 1,
 // common.wgsl's affine_term), computed once here rather than 27 times in the gather.
-// Mirrors the item building in `cpu::p2g`. On the atomic path only the first step of a
-// submission runs it: G2P leaves the affine term for the next step (g2p.wgsl).
+// Mirrors the item building in `cpu::p2g`. Only the first step of a submission runs it:
+// G2P leaves both for the next step (g2p.wgsl).
 
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> v_volume: array<vec4<f32>>;
@@ -24,14 +24,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     cell_values[p] = page.base + p;
     let xm = x_mass[p];
-    let st = grid_stencil(xm.xyz);
-    if !st.ok {
-        cell_keys[p] = no_cell_key();
-        return;
-    }
-    let bc = consts.cells - 1u;
-    let b = vec3<u32>(st.s.base);
-    cell_keys[p] = b.x + bc.x * (b.y + bc.y * b.z);
+    cell_keys[p] = cell_key(xm.xyz);
     affine[p] = affine_term(particle_material(material[p]), deformation[p], alpha[p],
                             affine_velocity[p], xm.w, v_volume[p].w);
 }

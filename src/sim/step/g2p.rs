@@ -1,6 +1,7 @@
 //! `shaders/sim/step/g2p.wgsl`: per particle: velocity, C, F and position from the grid,
-//! then the material's plasticity (G2P); on the atomic path also the next step's affine
-//! term.
+//! then the material's plasticity (G2P); then what [`super::Prepare`] would compute for
+//! the next step (the affine term, and on the gather path the sort key), so that only the
+//! first step of a submission prepares.
 
 use crate::gpu::Kernel;
 use crate::sim::models::ModelsUsed;
@@ -12,16 +13,16 @@ pub(crate) struct G2p {
 }
 
 impl G2p {
-    /// With `next_affine`, G2P also writes the next step's affine term (the atomic path,
-    /// whose later steps then skip [`super::Prepare`]); with `separation`, each particle
-    /// reads its own field (two-field separation compiled in).
+    /// With `next_keys` (the gather path), G2P also writes the next step's sort keys;
+    /// with `separation`, each particle reads its own field (two-field separation compiled
+    /// in).
     pub fn new(
         device: &wgpu::Device,
-        (next_affine, separation): (bool, bool),
+        (next_keys, separation): (bool, bool),
         used: &ModelsUsed,
     ) -> Self {
         let src = format!(
-            "const NEXT_AFFINE: bool = {next_affine};\nconst SEPARATION: bool = {separation};\n{}",
+            "const NEXT_KEYS: bool = {next_keys};\nconst SEPARATION: bool = {separation};\n{}",
             include_str!("../../../shaders/sim/step/g2p.wgsl")
         );
         G2p {
@@ -51,6 +52,8 @@ impl G2p {
                 ("flags", b.flags.as_entire_binding()),
                 ("block_slot", b.block_slot.as_entire_binding()),
                 ("affine", Buffer(b.window(&b.affine, i, MAT3))),
+                ("cell_keys", Buffer(b.window(&b.keys, i, SCALAR))),
+                ("cell_values", Buffer(b.window(&b.values, i, SCALAR))),
                 // Two-field separation runs on one page: whole buffers (one element
                 // each, unread, without it).
                 ("damage_gradient", b.damage_gradient.as_entire_binding()),

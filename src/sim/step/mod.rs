@@ -3,7 +3,8 @@
 //! by the names its WGSL declares. One step, on the gather path (every adapter):
 //!
 //! 1. [`Prepare`] — per particle: base-cell sort key and the affine term
-//!    m C − Δt V⁰ (4/Δx²) τ(F);
+//!    m C − Δt V⁰ (4/Δx²) τ(F) (the first step of a submission only: later steps take
+//!    both from the G2P before);
 //! 2. [`SortCells`] — particles by base cell (only the bits the cell count needs);
 //! 3. [`CellRanges`] — each cell's run of particles (the GPU primitive the renderer also
 //!    uses for its tiles);
@@ -17,16 +18,16 @@
 //!    separation), then the grid update (`grid_update.wgsl`: velocity, gravity, colliders,
 //!    walls; with separation the fields' contact first);
 //! 7. [`G2p`] — velocities, C, F, positions, the material's plasticity (each particle from
-//!    its own field).
+//!    its own field), then the next step's affine term and sort key.
 //!
 //! On the scatter paths steps 2–5 are instead [`MarkParticles`] (each particle flags the
 //! blocks of its stencil), [`CompactBlocks`], a scatter in which each particle adds to its
 //! 27 nodes — [`P2gScatter`] with float atomics (where the adapter has them; the order of
 //! the additions varies) or [`P2gFixed`] with integer atomics on fixed-point sums
 //! (deterministic, every adapter) — and [`GridFromSums`] (the grid update on the active
-//! blocks), and only the first step of a submission runs [`Prepare`]: that path's G2P
-//! leaves the next step's affine term, so later steps need not re-read F, C and the
-//! material for it.
+//! blocks). On every path only the first step of a submission runs [`Prepare`]: G2P
+//! leaves the next step's affine term (and on the gather path its sort keys), so later
+//! steps need not re-read F, C and the material for it.
 //!
 //! Each pass is a [`StepPass`] (`pass.rs`): its name, its bind groups over [`StepBuffers`]
 //! and its dispatches. [`Passes::new`] lists a path's passes in this order, and
@@ -310,7 +311,7 @@ impl Passes {
         let device = &gpu.device;
         let executor = gpu.executor();
         let atomic = scatter.is_some();
-        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, atomic, used))];
+        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, used))];
         match scatter {
             Some(scatter) => {
                 passes.push(Box::new(MarkParticles::new(device)));
@@ -341,7 +342,7 @@ impl Passes {
                 }
             }
         }
-        passes.push(Box::new(G2p::new(device, (atomic, separation), used)));
+        passes.push(Box::new(G2p::new(device, (!atomic, separation), used)));
         Passes {
             passes,
             scatter: atomic,
@@ -384,8 +385,8 @@ impl Passes {
             .collect()
     }
 
-    /// [`Prepare`] alone (the first pass): the affine term a scatter path's later steps
-    /// read from the step before.
+    /// [`Prepare`] alone (the first pass): the affine term and keys a step after the
+    /// first of a submission reads from the step before.
     pub fn prepare_only(&self) -> PassList {
         vec![0]
     }

@@ -6,19 +6,17 @@ use crate::sim::models::ModelsUsed;
 
 use super::{material_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
+/// Runs at the first step of a submission only: G2P leaves the next step's affine term
+/// and sort keys ([`super::G2p`]).
 pub(crate) struct Prepare {
     kernel: Kernel,
-    /// On the scatter path G2P leaves the next step's affine term ([`super::G2p`]), so
-    /// only the first step of a submission prepares.
-    first_step_only: bool,
 }
 
 impl Prepare {
-    pub fn new(device: &wgpu::Device, first_step_only: bool, used: &ModelsUsed) -> Self {
+    pub fn new(device: &wgpu::Device, used: &ModelsUsed) -> Self {
         let src = include_str!("../../../shaders/sim/step/prepare.wgsl");
         Prepare {
             kernel: material_kernel(device, "sim prepare", src, used),
-            first_step_only,
         }
     }
 
@@ -60,6 +58,6 @@ impl StepPass for Prepare {
     }
 
     fn runs(&self, first: bool) -> bool {
-        first || !self.first_step_only
+        first
     }
 }
