@@ -46,6 +46,11 @@ pub const BITS_PER_PASS: u32 = 4;
 pub const CHUNK_LANES: u32 = 8;
 /// The chunk sort's counters (digits × chunks) stay under this, which sets its digit width.
 const CHUNK_COUNTERS: u32 = 1 << 20;
+/// The chunk sort's counters per key of its capacity (and at least [`CHUNK_COUNTERS_MIN`]
+/// in all), which narrows the digits of small sorts: each pass clears, scans and walks
+/// every counter, so a small sort with wide digits spends its time on counters no key uses.
+const CHUNK_COUNTERS_PER_KEY: u32 = 4;
+const CHUNK_COUNTERS_MIN: u32 = 1 << 14;
 /// Keys one invocation of the chunk sort walks at most, and its widest digit: lavapipe
 /// stops an invocation after 65535 loop iterations in all (see `chunk_sort.wgsl`).
 pub const CHUNK_KEYS: u32 = 1 << 15;
@@ -120,13 +125,14 @@ pub fn pass_count(bits: u32) -> u32 {
     bits.div_ceil(BITS_PER_PASS).max(1)
 }
 
-/// Digit bits of each pass of the chunk sort over `chunks` chunks for `bits` key bits:
-/// as few passes as the counter budget allows, the bits split evenly between them.
-pub fn chunk_digits(bits: u32, chunks: u32) -> Vec<u32> {
-    let widest = (CHUNK_COUNTERS / chunks)
-        .max(2)
-        .ilog2()
-        .min(CHUNK_DIGIT_BITS);
+/// Digit bits of each pass of the chunk sort over `chunks` chunks for `bits` key bits of
+/// `capacity` keys: as few passes as the counter budget allows, the bits split evenly
+/// between them.
+pub fn chunk_digits(bits: u32, chunks: u32, capacity: u32) -> Vec<u32> {
+    let budget = capacity
+        .saturating_mul(CHUNK_COUNTERS_PER_KEY)
+        .clamp(CHUNK_COUNTERS_MIN, CHUNK_COUNTERS);
+    let widest = (budget / chunks).max(2).ilog2().min(CHUNK_DIGIT_BITS);
     let bits = bits.clamp(1, 32);
     let passes = bits.div_ceil(widest);
     let width = bits.div_ceil(passes);
@@ -355,7 +361,7 @@ fn chunks_layout(device: &wgpu::Device, capacity: u32, bits: u32, cores: u32) ->
         chunks <= CHUNK_KEYS,
         "{capacity} keys are more than the chunk sort can take"
     );
-    let widths = chunk_digits(bits, chunks);
+    let widths = chunk_digits(bits, chunks, capacity);
     let params = widths
         .iter()
         .scan(0, |shift, &width| {
@@ -405,7 +411,7 @@ mod tests {
                 assert!(capacity.div_ceil(chunks) <= CHUNK_KEYS, "{capacity} keys");
                 assert!(chunks <= CHUNK_KEYS, "{capacity} keys");
                 for bits in 1..=32 {
-                    let digits = chunk_digits(bits, chunks);
+                    let digits = chunk_digits(bits, chunks, capacity);
                     assert!(
                         digits.iter().sum::<u32>() >= bits,
                         "{bits} bits, {chunks} chunks"
@@ -420,7 +426,10 @@ mod tests {
             }
         }
         // The tile keys of a 1080p frame (13 bits) in one pass over 64 chunks.
-        assert_eq!(chunk_digits(13, 64), vec![13]);
-        assert_eq!(chunk_digits(32, 64), vec![11; 3]);
+        assert_eq!(chunk_digits(13, 64, 1 << 21), vec![13]);
+        assert_eq!(chunk_digits(32, 64, 1 << 21), vec![11; 3]);
+        // A small simulation's cell keys: two narrow passes rather than 8192 counters a
+        // chunk for 1331 keys.
+        assert_eq!(chunk_digits(13, 64, 1331), vec![7, 7]);
     }
 }
