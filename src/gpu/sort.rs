@@ -6,7 +6,9 @@
 //!   of 2048 keys ranked by a workgroup scan;
 //! - on a CPU driver, a counting sort over chunks (`shaders/gpu/chunk_sort.wgsl`): one
 //!   invocation walks each of a few dozen chunks in order, with digits of up to 13 bits,
-//!   so that a tile key needs one pass and a 32-bit depth three, with no barrier or atomic.
+//!   so that a tile key needs one pass and a 32-bit depth three, with no barrier or atomic;
+//!   a small sort takes narrower digits, since every pass pays for all of its counters
+//!   ([`chunk_digits`]).
 //!
 //! The number of keys is read on the GPU from a one-element buffer, so a sort can follow a
 //! pass that decides how many keys there are without a CPU round trip.
