@@ -1,7 +1,7 @@
 // P2G, part 2, and the grid update, gathered from the sorted particles by subgroups of
-// eight nodes (per active block; docs/method.md §2 steps 1–2, §2.4): the sums of
-// p2g.wgsl, for CPU drivers whose subgroups are 8 consecutive invocations, one SIMD vector
-// (lavapipe with 256-bit vectors).
+// eight nodes (per active block; docs/method.md §2.2): the sums of p2g.wgsl, for CPU
+// drivers whose subgroups are 8 consecutive invocations, one SIMD vector (lavapipe with
+// 256-bit vectors).
 //
 // Why: such a driver runs p2g.wgsl's walk one lane at a time, since each node walks its
 // own 27 cells and reads its particles at its own index. Here the eight nodes of a 2×2×2
@@ -131,7 +131,8 @@ fn rows_of(first: vec4<u32>, count: vec4<u32>, t: ptr<function, RowTable>, k: u3
 }
 
 // The table of the group's 16 rows, from each lane's two: `lo` (row 2·lane) and `hi`
-// (row 2·lane + 1), as (first, count).
+// (row 2·lane + 1), as (first, count). Four calls written out: a broadcast's lane must be
+// a constant.
 fn row_table(lo: vec2<u32>, hi: vec2<u32>) -> RowTable {
     let first = vec2<u32>(lo.x, hi.x);
     let count = vec2<u32>(lo.y, hi.y);

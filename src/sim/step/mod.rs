@@ -123,6 +123,20 @@ fn gather_bindings<'a>(
     ]
 }
 
+/// What both P2G gathers ([`P2gGather`], [`P2gBroadcast`]) read and write besides
+/// [`gather_bindings`]: the particles' P2G inputs, the grid textures and the captured
+/// surface (the grid update).
+fn p2g_gather_bindings(b: &StepBuffers) -> [(&'static str, wgpu::BindingResource<'_>); 6] {
+    [
+        ("x_mass", b.x_mass.as_entire_binding()),
+        ("v_volume", b.v_volume.as_entire_binding()),
+        ("affine", b.affine.as_entire_binding()),
+        ("grid_velocity", b.grid_velocity.binding()),
+        ("grid_velocity_change", b.grid_velocity_change.binding()),
+        ("surface", b.surface.as_entire_binding()),
+    ]
+}
+
 /// A step pass that calls no material function: its WGSL after the shared modules, entry
 /// point `main`.
 fn step_kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {

@@ -5,8 +5,8 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
-    StepPass,
+    gather_bindings, gather_source, p2g_gather_bindings, step_kernel, BindAt, Bound, Extent,
+    Sorted, StepBuffers, StepPass,
 };
 
 pub(crate) struct P2gGather {
@@ -31,18 +31,16 @@ impl P2gGather {
         b: &StepBuffers,
         sorted: &Sorted,
     ) -> wgpu::BindGroup {
-        let own = [
-            ("x_mass", b.x_mass.as_entire_binding()),
-            ("v_volume", b.v_volume.as_entire_binding()),
-            ("affine", b.affine.as_entire_binding()),
-            ("grid_velocity", b.grid_velocity.binding()),
-            ("grid_velocity_change", b.grid_velocity_change.binding()),
-            ("surface", b.surface.as_entire_binding()),
+        let separation = [
             ("damage_gradient", b.damage_gradient.as_entire_binding()),
             ("ridge", b.ridge.as_entire_binding()),
             ("far_field", b.far_field.as_entire_binding()),
         ];
-        let all: Vec<_> = gather_bindings(b, sorted).into_iter().chain(own).collect();
+        let all: Vec<_> = gather_bindings(b, sorted)
+            .into_iter()
+            .chain(p2g_gather_bindings(b))
+            .chain(separation)
+            .collect();
         self.kernel.bind_named_resources(device, &all)
     }
 }

@@ -5,7 +5,10 @@
 
 use crate::gpu::Kernel;
 
-use super::{gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, StepPass};
+use super::{
+    gather_bindings, gather_source, p2g_gather_bindings, step_kernel, BindAt, Bound, Extent,
+    StepPass,
+};
 
 /// The fields of `Lent` in `p2g_broadcast.wgsl`, each handed from one lane to all.
 const LENT_FIELDS: [&str; 6] = ["base", "fx_mass", "mv", "a0", "a1", "a2"];
@@ -46,17 +49,9 @@ impl StepPass for P2gBroadcast {
 
     fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
         let b = at.b;
-        let own = [
-            ("x_mass", b.x_mass.as_entire_binding()),
-            ("v_volume", b.v_volume.as_entire_binding()),
-            ("affine", b.affine.as_entire_binding()),
-            ("grid_velocity", b.grid_velocity.binding()),
-            ("grid_velocity_change", b.grid_velocity_change.binding()),
-            ("surface", b.surface.as_entire_binding()),
-        ];
         let all: Vec<_> = gather_bindings(b, at.sorted())
             .into_iter()
-            .chain(own)
+            .chain(p2g_gather_bindings(b))
             .collect();
         Bound::Whole(self.kernel.bind_named_resources(device, &all))
     }
