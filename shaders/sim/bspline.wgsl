@@ -33,16 +33,26 @@ fn bspline_stencil(x: vec3<f32>, inv_dx: f32) -> BsplineStencil {
     var s: BsplineStencil;
     s.base = vec3<i32>(base_f);
     s.fx = fx;
+    s.w = bspline_axis_weights(fx);
+    s.dw[0] = fx - 1.5;
+    s.dw[1] = -2.0 * (fx - 1.0);
+    s.dw[2] = fx - 0.5;
+    return s;
+}
+
+// w[a], a ∈ {0,1,2}: the per-axis weights of the stencil's offsets at fx = x/Δx − base.
+fn bspline_axis_weights(fx: vec3<f32>) -> array<vec3<f32>, 3> {
     let d0 = 1.5 - fx;
     let d1 = fx - 1.0;
     let d2 = fx - 0.5;
-    s.w[0] = 0.5 * d0 * d0;
-    s.w[1] = 0.75 - d1 * d1;
-    s.w[2] = 0.5 * d2 * d2;
-    s.dw[0] = -d0;
-    s.dw[1] = -2.0 * d1;
-    s.dw[2] = d2;
-    return s;
+    return array<vec3<f32>, 3>(0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2);
+}
+
+// Weight of offset off ∈ {0,1,2}³ from a stencil known by fx alone (bspline_weight).
+fn bspline_weight_at(fx: vec3<f32>, off: vec3<u32>) -> f32 {
+    let w = bspline_axis_weights(fx);
+    let p = bspline_pick(w[0], w[1], w[2], off);
+    return p.x * p.y * p.z;
 }
 
 // Weight w_ip of node base + off, off ∈ {0,1,2}³.

@@ -9,7 +9,7 @@
 // reach any of the eight. Each lane reads one particle of a chunk of eight and the subgroup
 // broadcasts it, so each particle is read once per group and every lane computes its
 // node's weight at once. A particle's stencil reaches 27 of the 64 (particle, node) pairs
-// it is tried against; the others have a zero weight and add nothing.
+// it is tried against; it adds nothing to the others.
 //
 // The sum of each node runs over its group's cells in order (z, then y, then x, as the
 // cell keys), and within a cell in the sort's order: the same on every run.
@@ -44,7 +44,7 @@ struct NodeSums {
 }
 
 // Add particle `q`'s share to node `node`'s sums, when its stencil reaches the node. The
-// weight and offset are p2g.wgsl's (bspline_stencil's per-axis weights, picked by offset).
+// weight and offset are p2g.wgsl's, from the particle's fx.
 fn add_lent(sums: ptr<function, NodeSums>, node: vec3<i32>, q: Lent, carry: bool) {
     let off = node - q.base;
     if any(off < vec3<i32>(0)) || any(off > vec3<i32>(2)) {
@@ -52,11 +52,7 @@ fn add_lent(sums: ptr<function, NodeSums>, node: vec3<i32>, q: Lent, carry: bool
     }
     let o = vec3<u32>(off);
     let fx = q.fx_mass.xyz;
-    let d0 = 1.5 - fx;
-    let d1 = fx - 1.0;
-    let d2 = fx - 0.5;
-    let wa = bspline_pick(0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2, o);
-    let w = wa.x * wa.y * wa.z;
+    let w = bspline_weight_at(fx, o);
     let d = (vec3<f32>(o) - fx) * consts.dx;
     let a = mat3x3<f32>(q.a0, q.a1, q.a2);
     (*sums).m += w * q.fx_mass.w;
