@@ -318,6 +318,7 @@ pub fn sim_bench(
         peer.check()?;
     }
     writeln!(out, "adapter: {}", gpu.describe())?;
+    writeln!(out, "{}", default_path_line(gpu)?)?;
     writeln!(
         out,
         "{:>10} {:>6} {:>16} {:>7} {:>6} {:>10} {:>16} {:>14}",
@@ -382,6 +383,26 @@ pub fn sim_bench(
         }
     }
     Ok(())
+}
+
+/// Which P2G path a long run on `gpu` takes by default, and the race's times where the
+/// adapter leaves the choice to one (`P2gRace`).
+fn default_path_line(gpu: &GpuContext) -> Result<String> {
+    use crate::sim::gpu::{P2gPath, P2gRace};
+    let case = SimCase::new(20_000, 64);
+    if !P2gRace::decides(gpu, &case.params, case.particles.len()) {
+        return Ok(format!(
+            "default P2G here: {} (no race on this adapter)",
+            P2gPath::best(gpu).name()
+        ));
+    }
+    let race = P2gRace::on(gpu)?;
+    Ok(format!(
+        "default P2G of a long run here: {} (race: float atomics {:.2}, gather {:.2} ms a step of its probe block)",
+        race.winner().name(),
+        race.atomic_ms,
+        race.gather_ms
+    ))
 }
 
 /// The active blocks and the per-pass times of one case.

@@ -685,3 +685,23 @@ fn gpu_fixed_point_range_is_counted_not_summed() {
         assert_eq!(&out.x[..n], &alone.x[..], "the outlier added to the grid");
     }
 }
+
+/// The P2G race times both paths on its probe block (finite, positive times, the faster
+/// path named), once per process and adapter: a second call returns the first's verdict.
+#[test]
+fn p2g_race_times_both_paths_once_and_names_the_faster() {
+    use splatter::sim::gpu::P2gRace;
+    for gpu in gpus().iter().filter(|g| g.features.float32_atomics) {
+        let race = P2gRace::on(gpu).unwrap();
+        for ms in [race.atomic_ms, race.gather_ms] {
+            assert!(ms.is_finite() && ms > 0.0, "{race:?}");
+        }
+        let faster = if race.gather_ms < race.atomic_ms {
+            P2gPath::Gather
+        } else {
+            P2gPath::Atomic
+        };
+        assert_eq!(race.winner(), faster, "{race:?}");
+        assert_eq!(P2gRace::on(gpu).unwrap(), race, "raced twice");
+    }
+}

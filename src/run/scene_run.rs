@@ -19,7 +19,7 @@ use crate::scene::lighting::SceneLighting;
 use crate::scene::simulation::SimulationSetup;
 use crate::scene::{self, BuildReport};
 use crate::sim::frame::FrameError;
-use crate::sim::gpu::{GpuSim, P2gPath, Watchdog};
+use crate::sim::gpu::{GpuSim, P2gPath, P2gRace, Watchdog};
 use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
 use crate::splat::sh::ShRotator;
 
@@ -65,6 +65,11 @@ pub(super) fn execute(
     let p2g = match &setup {
         Some(s) if opts.deterministic => {
             P2gPath::deterministic_for(gpu, &s.params, s.particles.len())
+        }
+        Some(s) if races(gpu, s, scene.frame_count()) => {
+            let race = P2gRace::on(gpu)?;
+            on_event(Event::Note(describe_race(&race)));
+            race.winner()
         }
         Some(s) => P2gPath::for_params(gpu, &s.params),
         None => P2gPath::best(gpu),
@@ -291,6 +296,24 @@ fn describe_lighting(l: &SceneLighting, gaussians: usize) -> String {
         )),
         gaussians,
         l.normals_seconds
+    )
+}
+
+/// Whether this run's P2G path is raced for ([`P2gRace`]): the adapter leaves the choice
+/// open and the run is long enough to pay for it.
+fn races(gpu: &GpuContext, s: &SimulationSetup, frames: u32) -> bool {
+    let steps = u64::from(s.steps_per_frame) * u64::from(frames);
+    P2gRace::decides(gpu, &s.params, s.particles.len())
+        && P2gRace::worth_running(s.particles.len(), steps)
+}
+
+fn describe_race(race: &P2gRace) -> String {
+    format!(
+        "P2G on this adapter: float atomics {:.1} ms, gather by subgroups {:.1} ms a step of a probe block (timed in {:.1} s); taking {}",
+        race.atomic_ms,
+        race.gather_ms,
+        race.seconds,
+        race.winner().name()
     )
 }
 

@@ -34,9 +34,11 @@ const MAT3_BYTES: u64 = 48;
 use super::codes::BLOCK;
 
 mod p2g_path;
+mod p2g_race;
 mod watchdog;
 
 pub use p2g_path::P2gPath;
+pub use p2g_race::P2gRace;
 pub use watchdog::Watchdog;
 
 /// Bytes of a scatter path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
