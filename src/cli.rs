@@ -292,7 +292,8 @@ pub(crate) struct RenderArgs {
     pub(crate) resume: bool,
     /// Bit-identical frames for the same input on the same adapter: the simulation sums
     /// P2G in integers (fixed point) or in a fixed order (the sorted gather: with two-field
-    /// separation, and on CPU drivers), instead of with float atomics.
+    /// separation, and on CPU drivers), instead of with float atomics. (On a CPU driver a
+    /// long run without it may take the gather too, where it measures faster: the log says.)
     #[arg(long)]
     pub(crate) deterministic: bool,
     /// Save the simulation state to OUT_DIR/checkpoint.bin every N frames (0: never).
