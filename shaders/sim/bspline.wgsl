@@ -34,9 +34,7 @@ fn bspline_stencil(x: vec3<f32>, inv_dx: f32) -> BsplineStencil {
     s.base = vec3<i32>(base_f);
     s.fx = fx;
     s.w = bspline_axis_weights(fx);
-    s.dw[0] = fx - 1.5;
-    s.dw[1] = -2.0 * (fx - 1.0);
-    s.dw[2] = fx - 0.5;
+    s.dw = bspline_axis_slopes(fx);
     return s;
 }
 
@@ -46,6 +44,11 @@ fn bspline_axis_weights(fx: vec3<f32>) -> array<vec3<f32>, 3> {
     let d1 = fx - 1.0;
     let d2 = fx - 0.5;
     return array<vec3<f32>, 3>(0.5 * d0 * d0, 0.75 - d1 * d1, 0.5 * d2 * d2);
+}
+
+// dw[a]: the derivatives of bspline_axis_weights with respect to fx.
+fn bspline_axis_slopes(fx: vec3<f32>) -> array<vec3<f32>, 3> {
+    return array<vec3<f32>, 3>(fx - 1.5, -2.0 * (fx - 1.0), fx - 0.5);
 }
 
 // Weight of offset off ∈ {0,1,2}³ from a stencil known by fx alone (bspline_weight).
@@ -72,6 +75,15 @@ fn bspline_pick(a0: vec3<f32>, a1: vec3<f32>, a2: vec3<f32>, off: vec3<u32>) -> 
 fn bspline_weight_grad(s: BsplineStencil, off: vec3<u32>, inv_dx: f32) -> vec3<f32> {
     let w = bspline_pick(s.w[0], s.w[1], s.w[2], off);
     let dw = bspline_pick(s.dw[0], s.dw[1], s.dw[2], off);
+    return vec3<f32>(dw.x * w.y * w.z, w.x * dw.y * w.z, w.x * w.y * dw.z) * inv_dx;
+}
+
+// The same from a stencil known by fx alone.
+fn bspline_weight_grad_at(fx: vec3<f32>, off: vec3<u32>, inv_dx: f32) -> vec3<f32> {
+    let aw = bspline_axis_weights(fx);
+    let adw = bspline_axis_slopes(fx);
+    let w = bspline_pick(aw[0], aw[1], aw[2], off);
+    let dw = bspline_pick(adw[0], adw[1], adw[2], off);
     return vec3<f32>(dw.x * w.y * w.z, w.x * dw.y * w.z, w.x * w.y * dw.z) * inv_dx;
 }
 

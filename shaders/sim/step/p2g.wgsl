@@ -36,18 +36,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     if two {
         ridge_i = ridge[idx].xyz;
     }
-    // Σ w m, Σ w (m v + affine d), Σ w m v (FLIP/PIC blends only); with two fields the
-    // near field's, and the far field's apart, with both fields' Σ m ∇w (with respect to
-    // the node). Scalars, not arrays indexed by field: a local array indexed at run time
-    // goes to memory on a CPU driver (lavapipe).
-    var msum = 0.0;
-    var psum = vec3<f32>(0.0);
-    var qsum = vec3<f32>(0.0);
-    var g_near = vec3<f32>(0.0);
-    var m_far = 0.0;
-    var p_far = vec3<f32>(0.0);
-    var q_far = vec3<f32>(0.0);
-    var g_far = vec3<f32>(0.0);
+    // the near field's sums (the only field without separation) and the far field's
+    var near = no_sums();
+    var far = no_sums();
     for (var n = 0u; n < 27u; n++) {
         let off = bspline_stencil_offset(n);
         let run = reaching_run(node, off);
@@ -63,59 +54,20 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
                 // ∇w with respect to the node is minus that with respect to x_p
                 let gm = -xm.w * bspline_weight_grad(s, off, consts.inv_dx);
                 if in_far_field(damage_gradient[p].xyz, ridge_i) {
-                    m_far += w * xm.w;
-                    p_far += mom;
-                    q_far += w * mv;
-                    g_far += gm;
+                    far.m += w * xm.w;
+                    far.p += mom;
+                    far.q += w * mv;
+                    far.g += gm;
                     continue;
                 }
-                g_near += gm;
+                near.g += gm;
             }
-            msum += w * xm.w;
-            psum += mom;
+            near.m += w * xm.w;
+            near.p += mom;
             if carry {
-                qsum += w * mv;
+                near.q += w * mv;
             }
         }
     }
-    if !two {
-        let v = node_velocity(node, psum, msum);
-        textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, msum));
-        if carry {
-            let dv = select(vec3<f32>(0.0), v - qsum / msum, msum > 0.0);
-            textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv, 0.0));
-        }
-        return;
-    }
-    // Two fields: trial velocities, the contact where the node holds both, then each
-    // field's boundary conditions (cpu::grid_update_at).
-    var v_near = vec3<f32>(0.0);
-    var v_far = vec3<f32>(0.0);
-    if msum > 0.0 {
-        v_near = trial_velocity(psum, msum);
-    }
-    if m_far > 0.0 {
-        v_far = trial_velocity(p_far, m_far);
-    }
-    if msum > 0.0 && m_far > 0.0 {
-        let c = field_contact(msum, v_near, g_near, m_far, v_far, g_far);
-        v_near = c.near;
-        v_far = c.far;
-    }
-    var dv_near = vec3<f32>(0.0);
-    var dv_far = vec3<f32>(0.0);
-    if msum > 0.0 {
-        v_near = constrained_velocity(node, v_near);
-        dv_near = v_near - qsum / msum;
-    }
-    if m_far > 0.0 {
-        v_far = constrained_velocity(node, v_far);
-        dv_far = v_far - q_far / m_far;
-    }
-    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v_near, msum));
-    far_field[2u * idx] = vec4<f32>(v_far, m_far);
-    if carry {
-        textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv_near, 0.0));
-        far_field[2u * idx + 1u] = vec4<f32>(dv_far, 0.0);
-    }
+    finish_node(node, idx, near, far, carry);
 }

@@ -1,7 +1,7 @@
 // P2G, part 2, and the grid update, gathered from the sorted particles by subgroups of
-// eight nodes (per active block; docs/method.md §2.2): the sums of p2g.wgsl, for CPU
-// drivers whose subgroups are 8 consecutive invocations, one SIMD vector (lavapipe with
-// 256-bit vectors).
+// eight nodes (per active block; docs/method.md §2.2): the sums of p2g.wgsl, one field or
+// two (SEPARATION, a constant P2gBroadcast prepends), for CPU drivers whose subgroups are
+// 8 consecutive invocations, one SIMD vector (lavapipe with 256-bit vectors).
 //
 // Why: such a driver runs p2g.wgsl's walk one lane at a time, since each node walks its
 // own 27 cells and reads its particles at its own index. Here the eight nodes of a 2×2×2
@@ -21,9 +21,15 @@
 @group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
 // xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
 @group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
+// Two-field separation only (step/separation.wgsl): ∇D_p per particle (xyz), the ridge
+// gradient per pool node, and the far field per pool node (p2g_sums.wgsl, finish_node)
+@group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
 
 // A particle as one lane hands it to the others: its stencil's base cell and fractional
-// position (bspline_stencil), mass, m v, and affine term (columns).
+// position (bspline_stencil), mass, m v, affine term (columns), and with two fields its
+// damage gradient ∇D_p (zero, and not handed over, with one).
 struct Lent {
     base: vec3<i32>,
     fx_mass: vec4<f32>,
@@ -31,34 +37,44 @@ struct Lent {
     a0: vec3<f32>,
     a1: vec3<f32>,
     a2: vec3<f32>,
+    gradient: vec3<f32>,
 }
 
 // Base cell of a lane with no particle: no node's stencil offset reaches it.
 const NO_BASE: i32 = -1000000;
 
-// The node sums of p2g.wgsl: Σ w m, Σ w (m v + affine d), and Σ w m v (FLIP/PIC blends).
-struct NodeSums {
-    m: f32,
-    p: vec3<f32>,
-    q: vec3<f32>,
-}
-
-// Add particle `q`'s share to node `node`'s sums, when its stencil reaches the node. The
-// weight and offset are p2g.wgsl's, from the particle's fx.
-fn add_lent(sums: ptr<function, NodeSums>, node: vec3<i32>, q: Lent, carry: bool) {
+// Add particle `q`'s share to node `node`'s sums (p2g_sums.wgsl), when its stencil reaches
+// the node: to the near field, or with two fields to the far one when q lies across the
+// ridge of the node's gradient `ridge_i`. The terms are p2g.wgsl's, from the particle's fx.
+fn add_lent(near: ptr<function, FieldSums>, far: ptr<function, FieldSums>, node: vec3<i32>,
+            ridge_i: vec3<f32>, q: Lent, carry: bool) {
     let off = node - q.base;
     if any(off < vec3<i32>(0)) || any(off > vec3<i32>(2)) {
         return;
     }
     let o = vec3<u32>(off);
     let fx = q.fx_mass.xyz;
+    let m = q.fx_mass.w;
     let w = bspline_weight_at(fx, o);
     let d = (vec3<f32>(o) - fx) * consts.dx;
     let a = mat3x3<f32>(q.a0, q.a1, q.a2);
-    (*sums).m += w * q.fx_mass.w;
-    (*sums).p += w * (q.mv + a * d);
+    let mom = w * (q.mv + a * d);
+    if SEPARATION {
+        // ∇w with respect to the node is minus that with respect to x_p
+        let gm = -m * bspline_weight_grad_at(fx, o, consts.inv_dx);
+        if in_far_field(q.gradient, ridge_i) {
+            (*far).m += w * m;
+            (*far).p += mom;
+            (*far).q += w * q.mv;
+            (*far).g += gm;
+            return;
+        }
+        (*near).g += gm;
+    }
+    (*near).m += w * m;
+    (*near).p += mom;
     if carry {
-        (*sums).q += w * q.mv;
+        (*near).q += w * q.mv;
     }
 }
 
@@ -79,6 +95,10 @@ fn lend(pos: u32, live: bool) -> Lent {
     q.a0 = a[0];
     q.a1 = a[1];
     q.a2 = a[2];
+    q.gradient = vec3<f32>(0.0);
+    if SEPARATION {
+        q.gradient = damage_gradient[p].xyz;
+    }
     return q;
 }
 
@@ -182,10 +202,19 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let hi = row_run(corner.x - 2, corner.y - 2 + i32(r1 & 3u), corner.z - 2 + i32(r1 >> 2u));
     let table = row_table(lo, hi);
     let carry = consts.flip > 0.0;
-    var sums: NodeSums;
-    sums.m = 0.0;
-    sums.p = vec3<f32>(0.0);
-    sums.q = vec3<f32>(0.0);
+    // The lane's node in the pool, and with two fields its ridge gradient. Lanes off the
+    // grid or outside the pool still walk: a broadcast needs every lane of the subgroup.
+    let on_grid = all(vec3<u32>(node) < consts.nodes);
+    var idx = NO_SLOT;
+    if on_grid {
+        idx = node_index(vec3<u32>(node));
+    }
+    var ridge_i = vec3<f32>(0.0);
+    if SEPARATION && idx != NO_SLOT {
+        ridge_i = ridge[idx].xyz;
+    }
+    var near = no_sums();
+    var far = no_sums();
     for (var k = 0u; k < table.total; k += 8u) {
         let mine = k + lane;
         let live = mine < table.total;
@@ -194,18 +223,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         // (a broadcast's lane must be a constant)
         LENT_BY_EACH_LANE
     }
-    let on_grid = all(vec3<u32>(node) < consts.nodes);
-    if !on_grid {
-        return;
-    }
-    let idx = node_index(vec3<u32>(node));
     if idx == NO_SLOT {
         return;
     }
-    let v = node_velocity(vec3<u32>(node), sums.p, sums.m);
-    textureStore(grid_velocity, grid_texel(idx), vec4<f32>(v, sums.m));
-    if carry {
-        let dv = select(vec3<f32>(0.0), v - sums.q / sums.m, sums.m > 0.0);
-        textureStore(grid_velocity_change, grid_texel(idx), vec4<f32>(dv, 0.0));
-    }
+    finish_node(vec3<u32>(node), idx, near, far, carry);
 }

@@ -123,10 +123,21 @@ fn gather_bindings<'a>(
     ]
 }
 
-/// What both P2G gathers ([`P2gGather`], [`P2gBroadcast`]) read and write besides
-/// [`gather_bindings`]: the particles' P2G inputs, the grid textures and the captured
-/// surface (the grid update).
-fn p2g_gather_bindings(b: &StepBuffers) -> [(&'static str, wgpu::BindingResource<'_>); 6] {
+/// A P2G gather's source ([`P2gGather`], [`P2gBroadcast`]): `SEPARATION` (two-field
+/// separation compiled in or out), [`gather_source`], and `p2g_sums.wgsl` (the sums both
+/// keep per field, and how they finish a node).
+fn p2g_gather_source(pass: &str, separation: bool) -> String {
+    let sums = include_str!("../../../shaders/sim/step/p2g_sums.wgsl");
+    format!(
+        "const SEPARATION: bool = {separation};\n{}",
+        gather_source(&[sums, pass].join("\n"))
+    )
+}
+
+/// What both P2G gathers read and write besides [`gather_bindings`]: the particles' P2G
+/// inputs, the grid textures, the captured surface (the grid update), and two-field
+/// separation's particle gradients, ridge and far field.
+fn p2g_gather_bindings(b: &StepBuffers) -> [(&'static str, wgpu::BindingResource<'_>); 9] {
     [
         ("x_mass", b.x_mass.as_entire_binding()),
         ("v_volume", b.v_volume.as_entire_binding()),
@@ -134,6 +145,9 @@ fn p2g_gather_bindings(b: &StepBuffers) -> [(&'static str, wgpu::BindingResource
         ("grid_velocity", b.grid_velocity.binding()),
         ("grid_velocity_change", b.grid_velocity_change.binding()),
         ("surface", b.surface.as_entire_binding()),
+        ("damage_gradient", b.damage_gradient.as_entire_binding()),
+        ("ridge", b.ridge.as_entire_binding()),
+        ("far_field", b.far_field.as_entire_binding()),
     ]
 }
 
@@ -349,8 +363,8 @@ impl Passes {
                     passes.push(Box::new(DamageGradient::new(device)));
                     passes.push(Box::new(Ridge::new(device)));
                 }
-                if !separation && gpu.cpu_subgroups_of_eight() {
-                    passes.push(Box::new(P2gBroadcast::new(device)));
+                if gpu.cpu_subgroups_of_eight() {
+                    passes.push(Box::new(P2gBroadcast::new(device, separation)));
                 } else {
                     passes.push(Box::new(P2gGather::new(device, separation)));
                 }

@@ -5,8 +5,8 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, gather_source, p2g_gather_bindings, step_kernel, BindAt, Bound, Extent,
-    Sorted, StepBuffers, StepPass,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, BindAt, Bound, Extent,
+    StepPass,
 };
 
 pub(crate) struct P2gGather {
@@ -16,32 +16,13 @@ pub(crate) struct P2gGather {
 impl P2gGather {
     /// With `separation`, per field (two-field separation compiled in).
     pub fn new(device: &wgpu::Device, separation: bool) -> Self {
-        let src = format!(
-            "const SEPARATION: bool = {separation};\n{}",
-            gather_source(include_str!("../../../shaders/sim/step/p2g.wgsl"))
+        let src = p2g_gather_source(
+            include_str!("../../../shaders/sim/step/p2g.wgsl"),
+            separation,
         );
         P2gGather {
             kernel: step_kernel(device, "sim p2g", &src),
         }
-    }
-
-    fn bind_group(
-        &self,
-        device: &wgpu::Device,
-        b: &StepBuffers,
-        sorted: &Sorted,
-    ) -> wgpu::BindGroup {
-        let separation = [
-            ("damage_gradient", b.damage_gradient.as_entire_binding()),
-            ("ridge", b.ridge.as_entire_binding()),
-            ("far_field", b.far_field.as_entire_binding()),
-        ];
-        let all: Vec<_> = gather_bindings(b, sorted)
-            .into_iter()
-            .chain(p2g_gather_bindings(b))
-            .chain(separation)
-            .collect();
-        self.kernel.bind_named_resources(device, &all)
     }
 }
 
@@ -51,7 +32,11 @@ impl StepPass for P2gGather {
     }
 
     fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
-        Bound::Whole(self.bind_group(device, at.b, at.sorted()))
+        let all: Vec<_> = gather_bindings(at.b, at.sorted())
+            .into_iter()
+            .chain(p2g_gather_bindings(at.b))
+            .collect();
+        Bound::Whole(self.kernel.bind_named_resources(device, &all))
     }
 
     /// One workgroup per active block, as many as `compact_blocks` wrote into `block_args`.

@@ -1,28 +1,46 @@
 //! `shaders/sim/step/p2g_broadcast.wgsl`: the gather of [`P2gGather`](super::P2gGather)
-//! (one field), walked by subgroups of eight nodes that share each particle they read by
+//! (one field or two), walked by subgroups of eight nodes that share each particle they read by
 //! broadcast: for CPU drivers whose subgroups are 8 invocations
 //! ([`GpuContext::cpu_subgroups_of_eight`](crate::gpu::GpuContext::cpu_subgroups_of_eight)).
 
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, gather_source, p2g_gather_bindings, step_kernel, BindAt, Bound, Extent,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, BindAt, Bound, Extent,
     StepPass,
 };
 
-/// The fields of `Lent` in `p2g_broadcast.wgsl`, each handed from one lane to all.
-const LENT_FIELDS: [&str; 6] = ["base", "fx_mass", "mv", "a0", "a1", "a2"];
+/// The fields of `Lent` in `p2g_broadcast.wgsl`, each handed from one lane to all, and
+/// whether only two-field separation reads it (else it is left zero, not handed over).
+const LENT_FIELDS: [(&str, bool); 7] = [
+    ("base", false),
+    ("fx_mass", false),
+    ("mv", false),
+    ("a0", false),
+    ("a1", false),
+    ("a2", false),
+    ("gradient", true),
+];
 
 /// The unrolled adds of the particle each lane 0..8 holds (a broadcast's lane index must
 /// be a constant expression).
-fn lent_by_each_lane() -> String {
+fn lent_by_each_lane(separation: bool) -> String {
     (0..8)
         .map(|lane| {
             let fields: Vec<String> = LENT_FIELDS
                 .iter()
-                .map(|f| format!("subgroupBroadcast(own.{f}, {lane}u)"))
+                .map(|&(f, two_only)| {
+                    if two_only && !separation {
+                        "vec3<f32>()".to_string()
+                    } else {
+                        format!("subgroupBroadcast(own.{f}, {lane}u)")
+                    }
+                })
                 .collect();
-            format!("add_lent(&sums, node, Lent({}), carry);", fields.join(", "))
+            format!(
+                "add_lent(&near, &far, node, ridge_i, Lent({}), carry);",
+                fields.join(", ")
+            )
         })
         .collect::<Vec<_>>()
         .join("\n        ")
@@ -33,11 +51,13 @@ pub(crate) struct P2gBroadcast {
 }
 
 impl P2gBroadcast {
-    pub fn new(device: &wgpu::Device) -> Self {
+    /// With `separation`, per field (two-field separation compiled in).
+    pub fn new(device: &wgpu::Device, separation: bool) -> Self {
         let pass = include_str!("../../../shaders/sim/step/p2g_broadcast.wgsl")
-            .replace("LENT_BY_EACH_LANE", &lent_by_each_lane());
+            .replace("LENT_BY_EACH_LANE", &lent_by_each_lane(separation));
+        let src = p2g_gather_source(&pass, separation);
         P2gBroadcast {
-            kernel: step_kernel(device, "sim p2g broadcast", &gather_source(&pass)),
+            kernel: step_kernel(device, "sim p2g broadcast", &src),
         }
     }
 }
