@@ -238,3 +238,39 @@ fn gpu_two_fields_match_the_cpu_reference() {
         }
     }
 }
+
+/// The GPU's ∇D_p (from its damage field, `damage_field` then `damage_gradient`) against the
+/// CPU reference's, on every test adapter: the pulled bar after 40 steps, from the state
+/// at the last step's start. The field's shape sets which particles go to a far field.
+#[test]
+fn gpu_damage_gradients_match_the_cpu_reference() {
+    for gpu in splatter::gpu::test_contexts() {
+        let start = pulled_bar(0.5, CRACK);
+        let grid = Grid::new(DVec3::ZERO, DVec3::ONE, DX);
+        let sp = params(
+            cfl_dt(&nacc(), 1.0, DX, 0.4),
+            Separation::DamageGradient,
+            Transfer::Apic,
+        );
+        let sim = GpuSim::new(&gpu, &start, &grid, &[nacc()], &sp).unwrap();
+        sim.step(&gpu, 39).unwrap();
+        let before = sim.read_particles(&gpu, &start).unwrap();
+        sim.step(&gpu, 1).unwrap();
+        let on_gpu = sim.read_damage_gradients(&gpu).unwrap();
+        let on_cpu =
+            splatter::sim::separation::particle_damage_gradients(&before, &grid, &[nacc()]);
+        let top = on_cpu.iter().map(|g| g.length()).fold(0.0, f64::max);
+        let worst = on_cpu
+            .iter()
+            .zip(&on_gpu)
+            .map(|(a, b)| (*a - *b).length())
+            .fold(0.0, f64::max);
+        println!(
+            "{}: ∇D_p of {} particles, largest {top:.3e}: GPU against CPU {worst:.2e}",
+            gpu.describe(),
+            start.len()
+        );
+        assert!(top > 1.0, "the crack should have a damage gradient: {top}");
+        assert!(worst < 1e-4 * top, "{worst} of {top}");
+    }
+}

@@ -766,6 +766,18 @@ impl GpuSim {
         self.num_blocks
     }
 
+    /// Two-field separation's ∇D_p per particle as the last step computed it (from the
+    /// state at that step's start; `damage_gradient.wgsl`).
+    pub fn read_damage_gradients(&self, gpu: &GpuContext) -> Result<Vec<DVec3>, GpuError> {
+        let n = self.num_particles as usize;
+        let mut data = crate::gpu::buffers::copy_out(gpu, &self.buffers.damage_gradient)?;
+        data.truncate(n * 16);
+        let g: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&data);
+        Ok(g.iter()
+            .map(|a| DVec3::new(f64::from(a[0]), f64::from(a[1]), f64::from(a[2])))
+            .collect())
+    }
+
     /// Copy the particle state back (positions, velocities, F, C, α; masses, volumes and
     /// materials as uploaded).
     pub fn read_particles(

@@ -56,18 +56,9 @@ pub const BROKEN: f64 = 1.0;
 /// field, per particle; all zero where nothing is damaged.
 pub fn partition(particles: &Particles, grid: &Grid, materials: &[Material]) -> Vec<u32> {
     let n = particles.len();
-    let damage: Vec<f64> = (0..n)
-        .into_par_iter()
-        .map(|p| materials[particles.material[p] as usize].damage(particles.alpha[p]))
-        .collect();
-    if damage.iter().all(|&d| d == 0.0) {
+    let Some((field, gradient)) = damage_gradients(particles, grid, materials) else {
         return vec![0; n];
-    }
-    let field = damage_field(particles, grid, &damage);
-    let gradient: Vec<DVec3> = (0..n)
-        .into_par_iter()
-        .map(|p| damage_gradient(particles.x[p], grid, &field))
-        .collect();
+    };
     let ridge = node_gradients(particles, grid, &field, &gradient);
     (0..n)
         .into_par_iter()
@@ -85,6 +76,40 @@ pub fn partition(particles: &Particles, grid: &Grid, materials: &[Material]) -> 
             far
         })
         .collect()
+}
+
+/// ∇D_p of every particle (docs/method.md §4.9 step 2), with the damage field it comes
+/// from; None where nothing is damaged.
+fn damage_gradients(
+    particles: &Particles,
+    grid: &Grid,
+    materials: &[Material],
+) -> Option<(DamageField, Vec<DVec3>)> {
+    let damage: Vec<f64> = (0..particles.len())
+        .into_par_iter()
+        .map(|p| materials[particles.material[p] as usize].damage(particles.alpha[p]))
+        .collect();
+    if damage.iter().all(|&d| d == 0.0) {
+        return None;
+    }
+    let field = damage_field(particles, grid, &damage);
+    let gradient = particles
+        .x
+        .par_iter()
+        .map(|x| damage_gradient(*x, grid, &field))
+        .collect();
+    Some((field, gradient))
+}
+
+/// ∇D_p of every particle (zero where nothing is damaged): what the GPU's
+/// `damage_gradient.wgsl` computes, for tests against it.
+pub fn particle_damage_gradients(
+    particles: &Particles,
+    grid: &Grid,
+    materials: &[Material],
+) -> Vec<DVec3> {
+    damage_gradients(particles, grid, materials)
+        .map_or_else(|| vec![DVec3::ZERO; particles.len()], |(_, g)| g)
 }
 
 fn node_index(grid: &Grid, node: IVec3) -> usize {

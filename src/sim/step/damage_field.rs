@@ -1,12 +1,14 @@
 //! `shaders/sim/step/damage_field.wgsl`: per node of the active blocks, the damage field
-//! D_i and whether a broken particle reaches the node (two-field separation, first pass).
+//! D_i and whether a broken particle reaches the node (two-field separation, first pass);
+//! and `damage_field_broadcast.wgsl`, the same sums walked by subgroups of eight nodes
+//! (`group_walk.wgsl`) for CPU drivers whose subgroups are 8 invocations.
 
 use crate::gpu::Kernel;
 use crate::sim::models::ModelsUsed;
 
 use super::{
-    gather_bindings, gather_source, material_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
-    StepPass,
+    gather_bindings, gather_source, material_kernel, walk_by_subgroups, BindAt, Bound, Extent,
+    Sorted, StepBuffers, StepPass,
 };
 
 pub(crate) struct DamageField {
@@ -14,10 +16,20 @@ pub(crate) struct DamageField {
 }
 
 impl DamageField {
-    pub fn new(device: &wgpu::Device, used: &ModelsUsed) -> Self {
-        let src = gather_source(include_str!("../../../shaders/sim/step/damage_field.wgsl"));
+    /// Walked by subgroups with `by_subgroups`
+    /// ([`GpuContext::cpu_subgroups_of_eight`](crate::gpu::GpuContext::cpu_subgroups_of_eight)).
+    pub fn new(device: &wgpu::Device, used: &ModelsUsed, by_subgroups: bool) -> Self {
+        let pass = if by_subgroups {
+            walk_by_subgroups(
+                include_str!("../../../shaders/sim/step/damage_field_broadcast.wgsl"),
+                &[("base", None), ("fx_mass", None), ("d", None)],
+                "add_lent(&sums, node, LENT);",
+            )
+        } else {
+            include_str!("../../../shaders/sim/step/damage_field.wgsl").to_string()
+        };
         DamageField {
-            kernel: material_kernel(device, "sim damage field", &src, used),
+            kernel: material_kernel(device, "sim damage field", &gather_source(&pass), used),
         }
     }
 

@@ -107,6 +107,32 @@ fn gather_source(pass: &str) -> String {
     .join("\n")
 }
 
+/// A gather by subgroups' pass (`group_walk.wgsl`, then `pass`), with the placeholder
+/// `LENT_BY_EACH_LANE` replaced by the unrolled `call` of the particle each lane 0..8
+/// lends, where `call` names it `LENT`. Each field of `Lent` is broadcast from that lane,
+/// or given a value instead (`Some`) where the pass's configuration does not read it. A
+/// broadcast's lane index must be a constant expression, hence the unrolling.
+fn walk_by_subgroups(pass: &str, fields: &[(&str, Option<&str>)], call: &str) -> String {
+    let lent = (0..8)
+        .map(|lane| {
+            let values: Vec<String> = fields
+                .iter()
+                .map(|&(f, value)| match value {
+                    Some(v) => v.to_string(),
+                    None => format!("subgroupBroadcast(own.{f}, {lane}u)"),
+                })
+                .collect();
+            call.replace("LENT", &format!("Lent({})", values.join(", ")))
+        })
+        .collect::<Vec<_>>()
+        .join("\n        ");
+    [
+        include_str!("../../../shaders/sim/step/group_walk.wgsl"),
+        &pass.replace("LENT_BY_EACH_LANE", &lent),
+    ]
+    .join("\n")
+}
+
 /// The bindings `node_gather.wgsl` declares, with the step constants and the block table
 /// every node pass reads.
 fn gather_bindings<'a>(
@@ -359,7 +385,8 @@ impl Passes {
                 passes.push(Box::new(MarkBlocks::new(device)));
                 passes.push(Box::new(CompactBlocks::new(device)));
                 if separation {
-                    passes.push(Box::new(DamageField::new(device, used)));
+                    let by_subgroups = gpu.cpu_subgroups_of_eight();
+                    passes.push(Box::new(DamageField::new(device, used, by_subgroups)));
                     passes.push(Box::new(DamageGradient::new(device)));
                     passes.push(Box::new(Ridge::new(device)));
                 }

@@ -6,45 +6,9 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, BindAt, Bound, Extent,
-    StepPass,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, walk_by_subgroups,
+    BindAt, Bound, Extent, StepPass,
 };
-
-/// The fields of `Lent` in `p2g_broadcast.wgsl`, each handed from one lane to all, and
-/// whether only two-field separation reads it (else it is left zero, not handed over).
-const LENT_FIELDS: [(&str, bool); 7] = [
-    ("base", false),
-    ("fx_mass", false),
-    ("mv", false),
-    ("a0", false),
-    ("a1", false),
-    ("a2", false),
-    ("gradient", true),
-];
-
-/// The unrolled adds of the particle each lane 0..8 holds (a broadcast's lane index must
-/// be a constant expression).
-fn lent_by_each_lane(separation: bool) -> String {
-    (0..8)
-        .map(|lane| {
-            let fields: Vec<String> = LENT_FIELDS
-                .iter()
-                .map(|&(f, two_only)| {
-                    if two_only && !separation {
-                        "vec3<f32>()".to_string()
-                    } else {
-                        format!("subgroupBroadcast(own.{f}, {lane}u)")
-                    }
-                })
-                .collect();
-            format!(
-                "add_lent(&near, &far, node, ridge_i, Lent({}), carry);",
-                fields.join(", ")
-            )
-        })
-        .collect::<Vec<_>>()
-        .join("\n        ")
-}
 
 pub(crate) struct P2gBroadcast {
     kernel: Kernel,
@@ -53,11 +17,28 @@ pub(crate) struct P2gBroadcast {
 impl P2gBroadcast {
     /// With `separation`, per field (two-field separation compiled in).
     pub fn new(device: &wgpu::Device, separation: bool) -> Self {
-        let pass = include_str!("../../../shaders/sim/step/p2g_broadcast.wgsl")
-            .replace("LENT_BY_EACH_LANE", &lent_by_each_lane(separation));
-        let src = p2g_gather_source(&pass, separation);
+        // the fields of `Lent`; one field has no damage gradient to hand over
+        let gradient = (!separation).then_some("vec3<f32>()");
+        let fields = [
+            ("base", None),
+            ("fx_mass", None),
+            ("mv", None),
+            ("a0", None),
+            ("a1", None),
+            ("a2", None),
+            ("gradient", gradient),
+        ];
+        let pass = walk_by_subgroups(
+            include_str!("../../../shaders/sim/step/p2g_broadcast.wgsl"),
+            &fields,
+            "add_lent(&near, &far, node, ridge_i, LENT, carry);",
+        );
         P2gBroadcast {
-            kernel: step_kernel(device, "sim p2g broadcast", &src),
+            kernel: step_kernel(
+                device,
+                "sim p2g broadcast",
+                &p2g_gather_source(&pass, separation),
+            ),
         }
     }
 }
