@@ -305,20 +305,32 @@ fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Resu
 /// material), for 20k particles on a 64³ grid and (unless `quick`) 1M particles on a 128³
 /// grid; plus GPU memory per particle. With `per_pass`, each case is also broken down by
 /// pass. With `peer`, the 20k fixed-corotated case is also stepped by that peer in the same
-/// run, and the ratios printed.
+/// run, and the ratios printed. With `separation`, the NACC cases only, with two-field
+/// separation on the gather path.
 pub fn sim_bench(
     gpu: &GpuContext,
-    steps: u32,
-    quick: bool,
-    per_pass: bool,
+    what: SimBench,
     peer: Option<Peer>,
     out: &mut dyn Write,
 ) -> Result<()> {
+    let SimBench {
+        steps,
+        quick,
+        per_pass,
+        separation,
+    } = what;
     if let Some(peer) = peer {
         peer.check()?;
     }
     writeln!(out, "adapter: {}", gpu.describe())?;
-    writeln!(out, "{}", default_path_line(gpu)?)?;
+    if separation {
+        writeln!(
+            out,
+            "P2G with separation: gather (the only path that runs it)"
+        )?;
+    } else {
+        writeln!(out, "{}", default_path_line(gpu)?)?;
+    }
     writeln!(
         out,
         "{:>10} {:>6} {:>16} {:>7} {:>6} {:>10} {:>16} {:>14}",
@@ -336,17 +348,34 @@ pub fn sim_bench(
         cases.push((1_000_000, 128));
     }
     let mut small = Vec::new();
+    let models: &[SimModel] = if separation {
+        &[SimModel::Nacc]
+    } else {
+        &[SimModel::Nacc, SimModel::FixedCorotated]
+    };
+    let paths = if separation {
+        vec![crate::sim::gpu::P2gPath::Gather]
+    } else {
+        sim_paths(gpu)
+    };
     for (k, (n, cells)) in cases.into_iter().enumerate() {
-        for model in [SimModel::Nacc, SimModel::FixedCorotated] {
-            let case = SimCase::with_model(n, cells, model);
-            for path in sim_paths(gpu) {
+        for &model in models {
+            let mut case = SimCase::with_model(n, cells, model);
+            if separation {
+                case.params.separation = crate::sim::Separation::DamageGradient;
+            }
+            for &path in &paths {
                 let (sim, t) = time_sim(gpu, &case, path, steps)?;
                 writeln!(
                     out,
                     "{:>10} {:>5}³ {:>16} {:>7} {:>6} {:>10.2} {:>16.1} {:>14.0}",
                     t.particles,
                     cells,
-                    model.name(),
+                    if separation {
+                        "nacc, two fields"
+                    } else {
+                        model.name()
+                    },
                     t.p2g,
                     steps,
                     t.ms_per_step,
@@ -403,6 +432,16 @@ fn default_path_line(gpu: &GpuContext) -> Result<String> {
         race.atomic_ms,
         race.gather_ms
     ))
+}
+
+/// What `bench sim` steps: `steps` per case, the 20k case only (`quick`), each case also
+/// by pass (`per_pass`), with two-field separation (`separation`).
+#[derive(Clone, Copy, Debug)]
+pub struct SimBench {
+    pub steps: u32,
+    pub quick: bool,
+    pub per_pass: bool,
+    pub separation: bool,
 }
 
 /// The active blocks and the per-pass times of one case.

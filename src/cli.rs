@@ -103,10 +103,14 @@ pub(crate) enum BenchWhat {
         /// slosh: `benches/peers/slosh/`, built beforehand as its README says).
         #[arg(long, value_enum)]
         peer: Option<splatter::bench::Peer>,
+        /// Step the NACC cases with two-field separation (`"separation": "damage_gradient"`),
+        /// on the gather path, the only one that runs it.
+        #[arg(long, conflicts_with = "peer")]
+        separation: bool,
         /// Instead, step one NACC case of about this many particles (a cube, 8 per cell, on
         /// a grid sized to hold it): arrays past one storage binding run page by page; wall
         /// time, bytes per particle, peak memory and the adapter's largest size.
-        #[arg(long, conflicts_with_all = ["quick", "per_pass", "peer"])]
+        #[arg(long, conflicts_with_all = ["quick", "per_pass", "peer", "separation"])]
         particles: Option<usize>,
     },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.

@@ -75,6 +75,7 @@ fn run(cli: Cli) -> Result<()> {
                     quick,
                     per_pass,
                     peer,
+                    separation,
                     particles,
                 },
         }) => {
@@ -82,7 +83,15 @@ fn run(cli: Cli) -> Result<()> {
             let out = &mut std::io::stdout();
             match particles {
                 Some(n) => splatter::bench::sim_scale_bench(&gpu, n, steps.max(1), out),
-                None => splatter::bench::sim_bench(&gpu, steps.max(1), quick, per_pass, peer, out),
+                None => {
+                    let what = splatter::bench::SimBench {
+                        steps: steps.max(1),
+                        quick,
+                        per_pass,
+                        separation,
+                    };
+                    splatter::bench::sim_bench(&gpu, what, peer, out)
+                }
             }
         }
         Some(Command::Bench {

@@ -1574,3 +1574,27 @@ fn a_missing_peer_is_refused_before_the_benchmark_runs() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(!stdout.contains("ms/step"), "{stdout}");
 }
+
+/// `bench sim --separation` steps the NACC case with two fields: its passes include the
+/// damage field, on the gather path.
+#[test]
+fn bench_sim_with_separation_runs_the_separation_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = splatter(
+        dir.path(),
+        &[
+            "bench",
+            "sim",
+            "--quick",
+            "--steps",
+            "2",
+            "--per-pass",
+            "--separation",
+        ],
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(stdout.contains("nacc, two fields  gather"), "{stdout}");
+    assert!(stdout.contains("damage field"), "{stdout}");
+    assert!(!stdout.contains("fixed_corotated"), "{stdout}");
+}
