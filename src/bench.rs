@@ -671,10 +671,7 @@ impl SimCase {
     /// About `n` particles of `model` on a `cells`³ grid.
     pub fn with_model(n: usize, cells: u32, model: SimModel) -> SimCase {
         use crate::sim::nacc::{Case3Variant, NaccParams};
-        use crate::sim::{
-            cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams,
-            Transfer,
-        };
+        use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
         use glam::DVec3;
         let material = match model {
             SimModel::Nacc => Material::nacc(
@@ -696,17 +693,10 @@ impl SimCase {
         let mut particles =
             Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, Self::DENSITY);
         particles.set_material(0, &material);
-        let params = StepParams {
-            dt: cfl_dt(&material, Self::DENSITY, dx, 0.4).min(1e-4),
-            gravity: DVec3::new(0.0, -9.8, 0.0),
-            boundaries: Boundaries {
-                walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
-                colliders: vec![],
-                surface: None,
-            },
-            transfer: Transfer::Apic,
-            separation: Default::default(),
-        };
+        let params = StepParams::sticky_ground(
+            cfl_dt(&material, Self::DENSITY, dx, 0.4).min(1e-4),
+            DVec3::new(0.0, -9.8, 0.0),
+        );
         SimCase {
             particles,
             grid: Grid::new(DVec3::ZERO, DVec3::ONE, dx),

@@ -45,6 +45,25 @@ pub struct StepParams {
     pub separation: Separation,
 }
 
+impl StepParams {
+    /// A drop onto a sticky ground (the domain's floor, walls that let go) with APIC and
+    /// one field: the benchmark's and the studies' usual setting.
+    pub fn sticky_ground(dt: f64, gravity: DVec3) -> StepParams {
+        use super::boundary::{Condition, DomainWalls};
+        StepParams {
+            dt,
+            gravity,
+            boundaries: Boundaries {
+                walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
+                colliders: vec![],
+                surface: None,
+            },
+            transfer: Transfer::Apic,
+            separation: Separation::None,
+        }
+    }
+}
+
 /// What one step saw.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct StepStats {

@@ -18,9 +18,7 @@ use serde::{Deserialize, Serialize};
 use super::runner::{simulate, Outcome};
 use crate::sim::nacc::{project_pq, ReturnCase};
 use crate::sim::ElasticModel;
-use crate::sim::{
-    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
-};
+use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
 use crate::sim::{return_map, Case3Variant, NaccParams};
 
 /// Trial pressure fraction (p_tr − p_c)/L_p above which a case-3 return is "near the
@@ -274,17 +272,7 @@ fn run_one(sweep: &str, value: f64, name: &str, variant: Case3Variant, quick: bo
     let mut grid = Grid::new(DVec3::ZERO, DVec3::new(0.4, 0.3, 0.4), dx);
     let dt = cfl_dt(&material, 2.0, dx, s.cfl);
     let steps = (T_END / dt).ceil() as usize;
-    let sp = StepParams {
-        dt,
-        gravity: DVec3::ZERO,
-        boundaries: Boundaries {
-            walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
-            colliders: vec![],
-            surface: None,
-        },
-        transfer: Transfer::Apic,
-        separation: Default::default(),
-    };
+    let sp = StepParams::sticky_ground(dt, DVec3::ZERO);
     let v_ref = (s.speed * s.speed + 2.0 * G * (center.y - GROUND)).sqrt();
     let e0 = energy(&p, &params);
     let mut t = Tally {

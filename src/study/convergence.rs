@@ -415,17 +415,7 @@ fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
     let dt = cfl_dt(&material, 2.0, dx, 0.4);
     let steps = (t_end / dt).round() as usize;
     let dt = t_end / steps as f64;
-    let sp = StepParams {
-        dt,
-        gravity: DVec3::ZERO,
-        boundaries: Boundaries {
-            walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
-            colliders: vec![],
-            surface: None,
-        },
-        transfer: Transfer::Apic,
-        separation: Default::default(),
-    };
+    let sp = StepParams::sticky_ground(dt, DVec3::ZERO);
     let gravity = |_| DVec3::new(0.0, -9.8, 0.0);
     let stats = simulate(
         &mut p,

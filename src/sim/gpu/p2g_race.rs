@@ -12,9 +12,7 @@ use glam::DVec3;
 use super::{GpuSim, P2gPath, SimSetupError};
 use crate::gpu::GpuContext;
 use crate::sim::nacc::{Case3Variant, NaccParams};
-use crate::sim::{
-    cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
-};
+use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
 
 /// The two timings of a race, in ms per step of the probe block, and the faster path.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,17 +123,10 @@ fn probe_block() -> (Particles, Grid, Material, StepParams) {
     let lo = DVec3::new(0.5 - side / 2.0, 3.0 * dx, 0.5 - side / 2.0);
     let mut particles = Particles::sample_box(lo, lo + DVec3::splat(side), dx / 2.0, density);
     particles.set_material(0, &material);
-    let params = StepParams {
-        dt: cfl_dt(&material, density, dx, 0.4).min(1e-4),
-        gravity: DVec3::new(0.0, -9.8, 0.0),
-        boundaries: Boundaries {
-            walls: DomainWalls::with_ground(Condition::STICKY, Condition::SEPARATE),
-            colliders: vec![],
-            surface: None,
-        },
-        transfer: Transfer::Apic,
-        separation: Default::default(),
-    };
+    let params = StepParams::sticky_ground(
+        cfl_dt(&material, density, dx, 0.4).min(1e-4),
+        DVec3::new(0.0, -9.8, 0.0),
+    );
     let grid = Grid::new(DVec3::ZERO, DVec3::ONE, dx);
     (particles, grid, material, params)
 }
