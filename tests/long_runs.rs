@@ -424,6 +424,26 @@ fn sizes_past_the_buffer_limits_are_refused_up_front() {
         d,
         &["render", "fine.json", "--out", "fine", "--frames", "0"],
     ));
+    // --deterministic too: where the gather would not fit, it takes the fixed-point scatter
+    // (on CPU drivers it would otherwise take the gather by subgroups).
+    let o = splatter(
+        d,
+        &[
+            "render",
+            "fine.json",
+            "--out",
+            "fine_det",
+            "--frames",
+            "0",
+            "--deterministic",
+        ],
+    );
+    expect_success(&o);
+    assert!(
+        stderr(&o).contains("P2G fixed (deterministic)"),
+        "{}",
+        stderr(&o)
+    );
     write(
         d,
         "fine_gather.json",

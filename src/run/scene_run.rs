@@ -64,9 +64,9 @@ pub(super) fn execute(
     let (width, height) = (scene.output.width, scene.output.height);
     let p2g = match &setup {
         Some(s) if opts.deterministic => {
-            P2gPath::deterministic_for(gpu, &s.params, s.particles.len())
+            P2gPath::deterministic_for(gpu, &s.params, s.particles.len(), gather_fits(gpu, s))
         }
-        Some(s) if races(gpu, s, scene.frame_count()) => {
+        Some(s) if races(gpu, s, job.frames.last().unwrap_or(0)) => {
             let race = P2gRace::on(gpu)?;
             on_event(Event::Note(describe_race(&race)));
             race.winner()
@@ -300,11 +300,22 @@ fn describe_lighting(l: &SceneLighting, gaussians: usize) -> String {
 }
 
 /// Whether this run's P2G path is raced for ([`P2gRace`]): the adapter leaves the choice
-/// open and the run is long enough to pay for it.
-fn races(gpu: &GpuContext, s: &SimulationSetup, frames: u32) -> bool {
-    let steps = u64::from(s.steps_per_frame) * u64::from(frames);
+/// open, the gather's buffers fit it, and the simulation up to `last_frame` is long enough
+/// to pay for the race.
+fn races(gpu: &GpuContext, s: &SimulationSetup, last_frame: u32) -> bool {
+    let steps = u64::from(s.steps_per_frame) * u64::from(last_frame);
     P2gRace::decides(gpu, &s.params, s.particles.len())
         && P2gRace::worth_running(s.particles.len(), steps)
+        && gather_fits(gpu, s)
+}
+
+/// Whether the gather path's buffers for this simulation fit the adapter's limits: it
+/// indexes every base cell of the grid, where the scatters hold only the blocks the
+/// particles reach.
+fn gather_fits(gpu: &GpuContext, s: &SimulationSetup) -> bool {
+    let surface = s.params.boundaries.surface.is_some();
+    let needs = limits::sim_needs(s.particles.len(), s.grid.cells, true, surface);
+    limits::check_gpu(gpu, &needs).is_ok()
 }
 
 fn describe_race(race: &P2gRace) -> String {

@@ -42,11 +42,17 @@ impl P2gPath {
     /// `gpu`: the gather for two-field separation (the scatter paths have one field), and
     /// where P2G gathers by subgroups ([`GpuContext::cpu_subgroups_of_eight`]: CPU drivers,
     /// on which the fixed-point scatter's integer atomics run one lane at a time) with the
-    /// particles in one storage binding; else the fixed-point scatter.
-    pub fn deterministic_for(gpu: &GpuContext, params: &StepParams, particles: usize) -> P2gPath {
+    /// particles in one storage binding and the gather's buffers within the adapter's
+    /// limits (`gather_fits`, `limits::sim_needs`); else the fixed-point scatter.
+    pub fn deterministic_for(
+        gpu: &GpuContext,
+        params: &StepParams,
+        particles: usize,
+        gather_fits: bool,
+    ) -> P2gPath {
         let one_page = super::GpuSim::pages_for(gpu, particles).count == 1;
         if params.separation != crate::sim::Separation::None
-            || (gpu.cpu_subgroups_of_eight() && one_page)
+            || (gpu.cpu_subgroups_of_eight() && one_page && gather_fits)
         {
             P2gPath::Gather
         } else {
