@@ -3,21 +3,8 @@
 // stencils reach node i (docs/method.md §2 step 1), then the node's velocity (grid_update.wgsl,
 // docs/method.md §2 step 2). Particles are sorted by base cell, so no atomics are needed: the sum has
 // a fixed order and the result is the same on every run and every backend. Mirrors
-// `cpu::p2g` followed by `cpu::grid_update`.
-
-@group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
-// xyz: velocity after the grid update, w: mass (common.wgsl, grid_texel)
-@group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
-// xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
-@group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
-// Two-field separation only (step/separation.wgsl): ∇D_p per particle (xyz), the ridge
-// gradient per pool node, and the far field per pool node: velocity xyz and mass w, then
-// the velocity change (FLIP/PIC blends)
-@group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
+// `cpu::p2g` followed by `cpu::grid_update`. Its bindings and the node's finish are in
+// p2g_sums.wgsl.
 
 @compute @workgroup_size(64)
 fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec3<u32>,

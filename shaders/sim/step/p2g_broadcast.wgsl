@@ -4,20 +4,8 @@
 // 8 consecutive invocations, one SIMD vector (lavapipe with 256-bit vectors).
 //
 // The walk, and why it pays there: group_walk.wgsl. Each lane adds to its own node the
-// particles whose stencils reach it, in the group's list order (docs/method.md §2.2).
-
-@group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
-@group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
-@group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
-// xyz: velocity after the grid update, w: mass (common.wgsl, grid_texel)
-@group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
-// xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
-@group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
-// Two-field separation only (step/separation.wgsl): ∇D_p per particle (xyz), the ridge
-// gradient per pool node, and the far field per pool node (p2g_sums.wgsl, finish_node)
-@group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
+// particles whose stencils reach it, in the group's list order (docs/method.md §2.2). Its
+// bindings and the node's finish are in p2g_sums.wgsl.
 
 // A particle as one lane hands it to the others: its stencil's base cell and fractional
 // position (bspline_stencil), mass, m v, affine term (columns), and with two fields its

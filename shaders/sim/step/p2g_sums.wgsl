@@ -1,7 +1,21 @@
 // What both P2G gathers (p2g.wgsl, p2g_broadcast.wgsl) sum at a node, per field, and how
 // they finish the node: the grid update (grid_update.wgsl), with two fields the contact of
 // the fields first (separation.wgsl). SEPARATION is a constant their Rust types prepend.
-// Both pass files declare grid_velocity, grid_velocity_change and far_field.
+// The bindings below are both passes' own (`step::p2g_gather_bindings`).
+
+@group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> affine: array<mat3x3<f32>>;
+// xyz: velocity after the grid update, w: mass (common.wgsl, grid_texel)
+@group(0) @binding(6) var grid_velocity: texture_storage_2d<rgba32float, write>;
+// xyz: what the step's forces changed, v_i − Σ w m_p v_p / m_i (FLIP/PIC blends only)
+@group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
+// Two-field separation only (step/separation.wgsl): ∇D_p per particle (xyz), the ridge
+// gradient per pool node, and the far field per pool node: velocity xyz and mass w, then
+// the velocity change (FLIP/PIC blends)
+@group(0) @binding(9) var<storage, read> damage_gradient: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read> ridge: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> far_field: array<vec4<f32>>;
 
 // One field's sums at a node: Σ w m, Σ w (m v + affine d), Σ w m v (read with a FLIP/PIC
 // blend), and with two fields Σ m ∇w with respect to the node. A struct per field, not an
