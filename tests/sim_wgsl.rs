@@ -1120,8 +1120,8 @@ fn every_registered_model_is_reached_by_its_code() {
         let m = materials[k];
         let a = ALPHAS[k];
         let o = ob + k * 19u;
-        out_mat3(o, material_kirchhoff(m, f) * material_stress_scale(m, a));
-        let p = material_plasticity(m, f, a);
+        out_mat3(o, material_stress(m, f, a));
+        let p = material_plasticity(m, f, a, item);
         out_mat3(o + 9u, p.f);
         out1(o + 18u, p.alpha);
     }";
@@ -1155,7 +1155,7 @@ fn every_registered_model_is_reached_by_its_code() {
                     backend(gpu)
                 );
                 worst_tau = worst_tau.max(err);
-                let (want_f, want_alpha) = m.plasticity(f, *alpha);
+                let (want_f, want_alpha) = m.plasticity_at(f, *alpha, i as u32);
                 let (got_f, got_alpha) = (mat_at(&out, o + 9), f64::from(out[o + 18]));
                 let err_f = max_abs(got_f - want_f);
                 let err_alpha = (got_alpha - want_alpha).abs();

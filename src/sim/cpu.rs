@@ -425,7 +425,7 @@ pub fn g2p(
             };
             *c = cp;
             *x += vp * dt;
-            let (f_new, a_new) = materials[*mat as usize].plasticity(f_trial, *alpha);
+            let (f_new, a_new) = materials[*mat as usize].plasticity_at(f_trial, *alpha, p as u32);
             *f = f_new;
             *alpha = a_new;
         });

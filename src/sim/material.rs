@@ -116,13 +116,28 @@ impl Material {
     /// Kirchhoff stress τ(F) at hardening state α (docs/method.md §3): the elastic model's,
     /// times the plastic model's hardening factor.
     pub fn kirchhoff(&self, f: DMat3, alpha: f64) -> DMat3 {
-        self.elastic.kirchhoff(f, &self.lame) * self.plastic.stress_scale(alpha)
+        self.plastic.kirchhoff(self.elastic, f, alpha, &self.lame)
     }
 
     /// The plastic step after the F update: the return mapping of the plastic model
     /// (docs/method.md §4), (F, α) unchanged without one.
     pub fn plasticity(&self, f_trial: DMat3, alpha: f64) -> (DMat3, f64) {
         self.plastic.return_map(f_trial, alpha, &self.lame)
+    }
+
+    /// [`Self::plasticity`] of particle `particle` (its index in the simulation's
+    /// particle arrays), for laws whose particles differ (a brittle material's strengths).
+    pub fn plasticity_at(&self, f_trial: DMat3, alpha: f64, particle: u32) -> (DMat3, f64) {
+        self.plastic
+            .return_map_at(f_trial, alpha, &self.lame, particle)
+    }
+
+    /// The material on a grid of spacing `dx` (a law's size effect).
+    pub fn for_grid(&self, dx: f64) -> Material {
+        Material {
+            plastic: self.plastic.for_grid(dx),
+            ..*self
+        }
     }
 }
 

@@ -165,8 +165,7 @@ fn particle_material(i: u32) -> SimMaterial {
 fn affine_term(m: SimMaterial, f: mat3x3<f32>, alpha: f32, c: mat3x3<f32>, mass: f32,
                volume: f32) -> mat3x3<f32> {
     let inv_d = 4.0 / (consts.dx * consts.dx);
-    let scale = material_stress_scale(m, alpha) * (-consts.dt * volume * inv_d);
-    var a = material_kirchhoff(m, f) * scale;
+    var a = material_stress(m, f, alpha) * (-consts.dt * volume * inv_d);
     if consts.apic == 1u {
         a += c * mass;
     }

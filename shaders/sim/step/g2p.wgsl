@@ -1,5 +1,5 @@
 // G2P (per particle, docs/method.md §2 step 3): v_pic = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
-// F ← (I + Δt C) F, x += Δt v_pic, then the material's plasticity (NACC return mapping,
+// F ← (I + Δt C) F, x += Δt v_pic, then the material's plasticity (its law's return mapping,
 // docs/method.md §4). The particle keeps v_pic, or with a FLIP/PIC blend
 // flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic. A particle whose stencil is off the grid
 // moves ballistically. Mirrors `cpu::g2p`.
@@ -120,7 +120,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     x_mass[p] = vec4<f32>(x, xm.w);
     leave_key(p, x);
     let m = particle_material(material[p]);
-    let plastic = material_plasticity(m, f_trial, alpha[p]);
+    let plastic = material_plasticity(m, f_trial, alpha[p], page.base + p);
     let f_new = plastic.f;
     alpha[p] = plastic.alpha;
     deformation[p] = f_new;

@@ -432,7 +432,7 @@ impl Bodies {
         let o = scene.origin.as_str();
         let physics = scene.objects[i].physics.as_ref().expect("simulated");
         let field = format!("objects[{i}].physics.material");
-        let material = physics.material.build(o, &field)?;
+        let material = physics.material.build(o, &field)?.for_grid(dx);
         let density = physics.material.density();
         self.dt_cfl = self.dt_cfl.min(cfl_dt(&material, density, dx, cfl));
         let m_index = self.materials.len() as u32;
@@ -440,7 +440,7 @@ impl Bodies {
         let regions = ObjectRegions::build(o, i, &physics.regions, &object_labels(part))?;
         for (m, rho) in &regions.materials {
             self.dt_cfl = self.dt_cfl.min(cfl_dt(m, *rho, dx, cfl));
-            self.materials.push(*m);
+            self.materials.push(m.for_grid(dx));
         }
         if self.materials.len() > crate::sim::gpu::MAX_MATERIALS {
             return Err(SceneError::invalid(

@@ -78,6 +78,7 @@ impl PlasticLaw for DruckerPrager {
             "return drucker_prager_return_map(f, alpha, m.mu, m.lambda, m.params[0], m.params[1]);",
         damage: "0.0",
         stress_scale: "1.0",
+        kirchhoff: None,
         module: include_str!("../../../shaders/sim/models/drucker_prager.wgsl"),
     };
     const EXAMPLE: Example = Example {

@@ -18,6 +18,7 @@
 //! line in the `plastic_registry!` below (with its `mod`). The scene file then accepts it
 //! by name, the schema lists its parameters, and the registry's tests run it.
 
+mod brittle;
 mod drucker_prager;
 mod fixed_corotated;
 mod nacc;
@@ -26,6 +27,7 @@ mod snow;
 mod stvk_hencky;
 mod von_mises;
 
+pub use brittle::Brittle;
 pub use drucker_prager::DruckerPrager;
 pub use nacc::Nacc;
 pub use snow::Snow;
@@ -87,12 +89,17 @@ impl ParamError {
 /// `m.kappa`, and the model's own `m.params[0..8]` as [`PlasticLaw::gpu_params`] packs
 /// them) and `alpha: f32`, the particle's hardening state.
 pub struct PlasticWgsl {
-    /// Statements ending in `return PlasticState(…);`, from the trial gradient `f`.
+    /// Statements ending in `return PlasticState(…);`, from the trial gradient `f` (and
+    /// `particle: u32`, the particle's index, for laws whose particles differ).
     pub return_map: &'static str,
     /// Expression: the particle's damage d ∈ [0, 1].
     pub damage: &'static str,
     /// Expression: the factor on the elastic stress (hardening that stiffens or softens).
     pub stress_scale: &'static str,
+    /// Expression: the law's own Kirchhoff stress in `f` and `alpha`, for a law whose
+    /// hardening state changes the stress by more than a factor (damage split between
+    /// tension and compression); `None`: the elastic model's times `stress_scale`.
+    pub kirchhoff: Option<&'static str>,
     /// The model's WGSL functions (its file under `shaders/sim/models/`).
     pub module: &'static str,
 }
@@ -135,6 +142,27 @@ pub trait PlasticLaw: Copy + std::fmt::Debug + PartialEq + Send + Sync + 'static
     /// The f64 oracle: (F, α) after the return mapping of the trial `f_trial`, with the
     /// material's Lamé parameters `lame`.
     fn return_map(&self, f_trial: DMat3, alpha: f64, lame: &Lame) -> (DMat3, f64);
+    /// The return mapping of particle `particle` (its index in the simulation's particle
+    /// arrays, which a law whose particles differ keys them by): [`Self::return_map`]
+    /// unless the law overrides it.
+    fn return_map_at(
+        &self,
+        f_trial: DMat3,
+        alpha: f64,
+        lame: &Lame,
+        _particle: u32,
+    ) -> (DMat3, f64) {
+        self.return_map(f_trial, alpha, lame)
+    }
+    /// The Kirchhoff stress at F = `f` and hardening state α: the elastic model's times
+    /// [`Self::stress_scale`] unless the law has its own (its WGSL `kirchhoff`).
+    fn kirchhoff(&self, elastic: ElasticModel, f: DMat3, alpha: f64, lame: &Lame) -> DMat3 {
+        elastic.kirchhoff(f, lame) * self.stress_scale(alpha)
+    }
+    /// The law on a grid of spacing `dx` (a size effect); itself unless it has one.
+    fn for_grid(&self, _dx: f64) -> Self {
+        *self
+    }
     /// α of a fresh particle.
     fn initial_alpha(&self) -> f64 {
         0.0
@@ -157,6 +185,7 @@ const NONE_WGSL: PlasticWgsl = PlasticWgsl {
     return_map: "return PlasticState(f, alpha);",
     damage: "0.0",
     stress_scale: "1.0",
+    kirchhoff: None,
     module: "",
 };
 
@@ -346,6 +375,31 @@ macro_rules! plastic_registry {
                 }
             }
 
+            /// (F, α) after the return mapping of particle `particle`
+            /// ([`PlasticLaw::return_map_at`]).
+            pub fn return_map_at(&self, f_trial: DMat3, alpha: f64, lame: &Lame, particle: u32) -> (DMat3, f64) {
+                match self {
+                    Plastic::None => (f_trial, alpha),
+                    $(Plastic::$variant(law) => law.return_map_at(f_trial, alpha, lame, particle),)+
+                }
+            }
+
+            /// The Kirchhoff stress ([`PlasticLaw::kirchhoff`]).
+            pub fn kirchhoff(&self, elastic: ElasticModel, f: DMat3, alpha: f64, lame: &Lame) -> DMat3 {
+                match self {
+                    Plastic::None => elastic.kirchhoff(f, lame),
+                    $(Plastic::$variant(law) => law.kirchhoff(elastic, f, alpha, lame),)+
+                }
+            }
+
+            /// The law on a grid of spacing `dx` ([`PlasticLaw::for_grid`]).
+            pub fn for_grid(&self, dx: f64) -> Plastic {
+                match self {
+                    Plastic::None => Plastic::None,
+                    $(Plastic::$variant(law) => Plastic::$variant(law.for_grid(dx)),)+
+                }
+            }
+
             /// α of a fresh particle.
             pub fn initial_alpha(&self) -> f64 {
                 match self {
@@ -404,6 +458,7 @@ plastic_registry!(
     DruckerPrager => drucker_prager::DruckerPrager,
     VonMises => von_mises::VonMises,
     Snow => snow::Snow,
+    Brittle => brittle::Brittle,
 );
 
 impl ElasticModel {
@@ -511,9 +566,10 @@ pub fn wgsl_for(used: &ModelsUsed) -> String {
             s += &format!("        default: {{ {default} }}\n    }}\n}}\n\n");
             s
         };
-    out += "// Return mapping of material m from the trial gradient f and hardening state alpha.\n";
+    out += "// Return mapping of material m from the trial gradient f and hardening state alpha\n";
+    out += "// of particle `particle` (its index in the particle arrays).\n";
     out += &plastic_switch(
-        "fn material_plasticity(m: SimMaterial, f: mat3x3<f32>, alpha: f32)",
+        "fn material_plasticity(m: SimMaterial, f: mat3x3<f32>, alpha: f32, particle: u32)",
         "PlasticState",
         "return PlasticState(f, alpha);",
         &|m| m.wgsl().return_map.to_string(),
@@ -525,12 +581,19 @@ pub fn wgsl_for(used: &ModelsUsed) -> String {
         "return 0.0;",
         &|m| format!("return {};", m.wgsl().damage),
     );
-    out += "// Factor on material m's elastic stress at hardening state alpha (`Material::kirchhoff`).\n";
+    out += "// Kirchhoff stress of material m at F = f and hardening state alpha (`Material::kirchhoff`):\n";
+    out += "// the elastic model's times the law's factor, or the law's own.\n";
     out += &plastic_switch(
-        "fn material_stress_scale(m: SimMaterial, alpha: f32)",
-        "f32",
-        "return 1.0;",
-        &|m| format!("return {};", m.wgsl().stress_scale),
+        "fn material_stress(m: SimMaterial, f: mat3x3<f32>, alpha: f32)",
+        "mat3x3<f32>",
+        "return material_kirchhoff(m, f);",
+        &|m| match m.wgsl().kirchhoff {
+            Some(own) => format!("return {own};"),
+            None => format!(
+                "return material_kirchhoff(m, f) * ({});",
+                m.wgsl().stress_scale
+            ),
+        },
     );
     out
 }

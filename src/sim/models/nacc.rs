@@ -63,6 +63,7 @@ impl PlasticLaw for Nacc {
         return_map: "let r = nacc_return_map(f, alpha, nacc_material(m)); return PlasticState(r.f, r.alpha);",
         damage: "nacc_damage(m.params[5], alpha)",
         stress_scale: "1.0",
+        kirchhoff: None,
         module: include_str!("../../../shaders/sim/models/nacc.wgsl"),
     };
     const EXAMPLE: Example = Example {

@@ -65,6 +65,7 @@ impl PlasticLaw for Snow {
         return_map: "return snow_return_map(f, alpha, m.params[0], m.params[1]);",
         damage: "0.0",
         stress_scale: "snow_hardening(m.params[2], alpha)",
+        kirchhoff: None,
         module: include_str!("../../../shaders/sim/models/snow.wgsl"),
     };
     const EXAMPLE: Example = Example {

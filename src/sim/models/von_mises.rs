@@ -67,6 +67,7 @@ impl PlasticLaw for VonMises {
         return_map: "return von_mises_return_map(f, alpha, m.mu, m.params[0], m.params[1]);",
         damage: "0.0",
         stress_scale: "1.0",
+        kirchhoff: None,
         module: include_str!("../../../shaders/sim/models/von_mises.wgsl"),
     };
     const EXAMPLE: Example = Example {
