@@ -301,12 +301,12 @@ fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Resu
 }
 
 /// `splatter bench sim`: nanoseconds per particle-step of the GPU MPM step, with a NACC
-/// material (the paper's fruit parameters) and with fixed corotated (the peers' usual
-/// material), for 20k particles on a 64³ grid and (unless `quick`) 1M particles on a 128³
+/// material (the paper's fruit parameters), the brittle law and fixed corotated (the
+/// peers' usual material), for 20k particles on a 64³ grid and (unless `quick`) 1M particles on a 128³
 /// grid; plus GPU memory per particle. With `per_pass`, each case is also broken down by
 /// pass. With `peer`, the 20k fixed-corotated case is also stepped by that peer in the same
-/// run, and the ratios printed. With `separation`, the NACC cases only, with two-field
-/// separation on the gather path.
+/// run, and the ratios printed. With `separation`, the fracturing cases only (NACC and
+/// brittle), with two-field separation on the gather path.
 pub fn sim_bench(
     gpu: &GpuContext,
     what: SimBench,
@@ -349,9 +349,9 @@ pub fn sim_bench(
     }
     let mut small = Vec::new();
     let models: &[SimModel] = if separation {
-        &[SimModel::Nacc]
+        &[SimModel::Nacc, SimModel::Brittle]
     } else {
-        &[SimModel::Nacc, SimModel::FixedCorotated]
+        &[SimModel::Nacc, SimModel::Brittle, SimModel::FixedCorotated]
     };
     let paths = if separation {
         vec![crate::sim::gpu::P2gPath::Gather]
@@ -372,9 +372,9 @@ pub fn sim_bench(
                     t.particles,
                     cells,
                     if separation {
-                        "nacc, two fields"
+                        format!("{}, two fields", model.name())
                     } else {
-                        model.name()
+                        model.name().to_string()
                     },
                     t.p2g,
                     steps,
@@ -633,6 +633,9 @@ pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
 pub enum SimModel {
     /// NACC with the paper's fruit parameters, `continuous` k = 2.
     Nacc,
+    /// Brittle damage with the same E and ν (`sim::models::Brittle`: σ̄ 100 Pa,
+    /// Weibull m 6, softening 0.5), the law the shipped drops break with.
+    Brittle,
     /// Fixed corotated with the same E and ν (what MPM peers run).
     FixedCorotated,
 }
@@ -641,6 +644,7 @@ impl SimModel {
     pub fn name(self) -> &'static str {
         match self {
             SimModel::Nacc => "nacc",
+            SimModel::Brittle => "brittle",
             SimModel::FixedCorotated => "fixed_corotated",
         }
     }
@@ -685,6 +689,15 @@ impl SimCase {
                 },
                 Case3Variant::Continuous { k: 2.0 },
             ),
+            SimModel::Brittle => {
+                use crate::sim::models::{Brittle, PlasticLaw};
+                let spec = serde_json::json!({
+                    "strength": 100.0, "weibull_modulus": 6.0, "softening": 0.5
+                });
+                let spec = serde_json::from_value(spec).expect("the brittle case's parameters");
+                let law = Brittle::from_spec(spec, Self::E, Self::NU).expect("valid");
+                Material::with_plastic(law.into(), Self::E, Self::NU)
+            }
             SimModel::FixedCorotated => Material::fixed_corotated(Self::E, Self::NU),
         };
         let dx = 1.0 / f64::from(cells);

@@ -170,7 +170,7 @@ pub(crate) enum BenchWhat {
         /// centre: a quarter of the particles, so a CPU reaches finer spacings (no stills).
         #[arg(long)]
         shatter_quarter: bool,
-        /// Directory of the shipped scenes (the shatter study runs watermelon_drop.json).
+        /// Directory of the shipped scenes (the shatter study runs watermelon_drop_nacc.json).
         #[arg(long, default_value = "scenes")]
         scenes: PathBuf,
     },

@@ -431,20 +431,23 @@ fn watermelon_breaks_jelly_stays_whole_sandcastle_crumbles() {
     );
 }
 
-/// The flat drop of the paper's watermelon (`scenes/watermelon_drop.json`) at draft quality
-/// (Δx 0.03), six frames: the impact damages the fruit, and the run stays sound — no
-/// particle turns non-finite, none moves faster than 1.5× the drop speed, and the kinetic
-/// plus gravitational energy never rises above its start. At this Δx the shatter study
-/// (docs/accuracy.md) finds one body; a change of pieces here means the study is out of date.
+/// The flat drop of the brittle watermelon (`scenes/watermelon_drop.json`) on a coarser
+/// grid (draft quality, Δx 0.03: 8× fewer particles), its first FRAMES frames: it still
+/// shatters (at least 3 pieces with ≥ 1% of the particles each, none with half), and the
+/// run stays sound: no particle turns non-finite, none moves faster than 1.5× the drop
+/// speed after the impact, and the kinetic plus gravitational energy never rises above
+/// its start. A law or a scene that stopped localising damage (a fruit that bounces whole,
+/// or one that turns to a heap of rubble) fails here.
 #[test]
-fn the_flat_watermelon_drop_is_damaged_and_stays_sound() {
+fn the_flat_watermelon_drop_shatters_on_a_coarser_grid() {
+    const FRAMES: usize = 8;
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("drop");
     render(
         &root.join("watermelon_drop.json"),
         &out,
-        "0..6",
+        &format!("0..{FRAMES}"),
         &["--quality", "draft", "--fragments"],
     );
     let rows = fruit_rows(
@@ -459,10 +462,11 @@ fn the_flat_watermelon_drop_is_damaged_and_stays_sound() {
         ],
     );
     let (first, last) = (&rows[0], rows.last().unwrap());
-    eprintln!("watermelon_drop, draft: frame 0 {first:?}, frame 5 {last:?}");
-    assert_eq!(rows.len(), 6);
-    let damaged = rows.iter().map(|r| r[2]).fold(0.0, f64::max);
-    assert!(damaged > 0.05, "the impact damages the fruit ({damaged})");
+    eprintln!(
+        "watermelon_drop, draft: frame 0 {first:?}, frame {} {last:?}",
+        FRAMES - 1
+    );
+    assert_eq!(rows.len(), FRAMES);
     for (frame, r) in rows.iter().enumerate().skip(1) {
         assert_eq!(r[5], 0.0, "frame {frame}: non-finite particles");
         assert!(r[3] < 1.5 * first[3], "frame {frame}: speed {} m/s", r[3]);
@@ -473,7 +477,9 @@ fn the_flat_watermelon_drop_is_damaged_and_stays_sound() {
             first[4]
         );
     }
-    assert_eq!(last[0], 1.0, "pieces at Δx 0.03 (docs/accuracy.md)");
+    assert!(last[0] >= 3.0, "it shatters: {} pieces", last[0]);
+    assert!(last[1] < 0.5, "no piece keeps half the fruit ({})", last[1]);
+    assert!(last[2] < 0.5, "cracks, not rubble: {} damaged", last[2]);
 }
 
 /// The watermelon's rows of `out/fragments.csv`, the named columns of each.
@@ -489,7 +495,8 @@ fn fruit_rows(out: &Path, columns: &[&str]) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The shatter study's quarter fruit (`study::shatter::cut_to_quarter`: one quarter between
+/// The shatter study's quarter fruit (`study::shatter::cut_to_quarter` on the NACC drop,
+/// `scenes/watermelon_drop_nacc.json`: one quarter between
 /// two slip planes through the centre) moves as its part of the whole fruit: at draft
 /// quality it holds exactly a quarter of the particles, and through the impact and rebound
 /// (frames 1–4) four times its kinetic plus gravitational energy is the whole fruit's within
@@ -499,7 +506,7 @@ fn fruit_rows(out: &Path, columns: &[&str]) -> Vec<Vec<f64>> {
 fn a_quarter_of_the_dropped_watermelon_moves_as_a_quarter_of_the_whole() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let dir = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(root.join("watermelon_drop.json")).unwrap();
+    let text = std::fs::read_to_string(root.join("watermelon_drop_nacc.json")).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     splatter::study::shatter::cut_to_quarter(&mut v).unwrap();
     let quarter_scene = dir.path().join("quarter.json");
@@ -507,7 +514,7 @@ fn a_quarter_of_the_dropped_watermelon_moves_as_a_quarter_of_the_whole() {
     let columns = ["particles", "damaged_share", "energy", "nonfinite"];
     let mut runs = Vec::new();
     for (name, scene) in [
-        ("whole", root.join("watermelon_drop.json")),
+        ("whole", root.join("watermelon_drop_nacc.json")),
         ("quarter", quarter_scene),
     ] {
         let out = dir.path().join(name);

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Scenes for the watermelon's ingredient table (docs/accuracy.md, "Ingredients").
 
-Each variant is scenes/watermelon_drop.json with the ingredients that differ from the
+Each variant is scenes/watermelon_drop_nacc.json with the ingredients that differ from the
 official GaussianFluent release's watermelon switched to the release's values, cut to 6
 frames (the impact and the first rebound):
 
@@ -26,7 +26,7 @@ import os
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-SHIPPED = os.path.join(HERE, "..", "..", "scenes", "watermelon_drop.json")
+SHIPPED = os.path.join(HERE, "..", "..", "scenes", "watermelon_drop_nacc.json")
 
 
 def nacc(e, beta, rho, xi, m):

@@ -1,4 +1,4 @@
-//! The shatter study: `scenes/watermelon_drop.json` (the paper's watermelon dropped onto a
+//! The shatter study: `scenes/watermelon_drop_nacc.json` (the paper's watermelon dropped onto a
 //! flat table) run at several grid spacings Δx and with both NACC return mappings, each
 //! run measured by `--fragments` on its last frame (pieces, largest share, damaged share)
 //! and over all frames (the fastest particle against the impact speed, the kinetic plus
@@ -87,7 +87,7 @@ pub enum ShatterEvent<'a> {
     Done(&'a ShatterRun),
 }
 
-/// Runs the study on `scenes/watermelon_drop.json` under `scenes`.
+/// Runs the study on `scenes/watermelon_drop_nacc.json` under `scenes`.
 /// Each whole-fruit run's last frame is kept as `stills/shatter_{mapping}_{dx}.png`, and
 /// with both mappings, the two at the finest Δx side by side as
 /// `stills/shatter_mappings.png`. Quarter runs keep no still: the rest of the fruit stays
@@ -98,7 +98,7 @@ pub fn run_shatter(
     plan: &ShatterPlan,
     on_event: &mut dyn FnMut(ShatterEvent),
 ) -> Result<ShatterReport> {
-    let scene = scenes.join("watermelon_drop.json");
+    let scene = scenes.join("watermelon_drop_nacc.json");
     let text = std::fs::read_to_string(&scene)
         .with_context(|| format!("cannot read {}", scene.display()))?;
     let mut value: Value = serde_json::from_str(&text)?;
@@ -132,7 +132,7 @@ pub fn run_shatter(
         side_by_side(&pair, &stills.join("shatter_mappings.png"))?;
     }
     Ok(ShatterReport {
-        scene: "scenes/watermelon_drop.json".into(),
+        scene: "scenes/watermelon_drop_nacc.json".into(),
         runs,
     })
 }

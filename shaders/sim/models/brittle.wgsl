@@ -2,8 +2,8 @@
 // that never heals, on St. Venant–Kirchhoff Hencky elasticity split so that damage degrades
 // the deviatoric energy always and the volumetric energy only in tension. Each particle's
 // strength is a Weibull draw keyed by its index. params: σ₀ (Weibull scale), 1/m (0: one
-// strength), softening s, the seed's key
-// (an integer below 2^24, exact in f32).
+// strength), softening s, the seed's key (an integer below 2^24, exact in f32), ln(1 − θ)
+// (the compaction's floor on ln J).
 
 // Damage at which a particle is rubble (`brittle::BROKEN`).
 const BRITTLE_BROKEN: f32 = 0.99;
@@ -28,9 +28,11 @@ fn brittle_strength(particle: u32, scale: f32, inv_m: f32, key: u32) -> f32 {
 }
 
 // d ← max(d, D(y)) with y the largest effective principal stress over the strength; a
-// particle past BRITTLE_BROKEN keeps its rotation and compression only.
+// compression past ln J = ln_j_min compacts; a particle past BRITTLE_BROKEN keeps its
+// rotation and a compression down to ln_j_min only.
 fn brittle_return_map(f: mat3x3<f32>, alpha: f32, particle: u32, mu: f32, kappa: f32,
-                      scale: f32, inv_m: f32, softening: f32, key: u32) -> PlasticState {
+                      scale: f32, inv_m: f32, softening: f32, key: u32,
+                      ln_j_min: f32) -> PlasticState {
     let d = svd3(f);
     let eps = hencky_strain(d);
     let tr = eps.x + eps.y + eps.z;
@@ -42,11 +44,15 @@ fn brittle_return_map(f: mat3x3<f32>, alpha: f32, particle: u32, mu: f32, kappa:
         damage = max(damage, 1.0 - exp(-(y - 1.0) / softening) / y);
     }
     damage = clamp(damage, 0.0, 1.0);
-    if damage < BRITTLE_BROKEN {
+    if damage >= BRITTLE_BROKEN {
+        let stretch = exp(clamp(tr, ln_j_min, 0.0) / 3.0);
+        return PlasticState(d.u * transpose(d.v) * stretch, 1.0);
+    }
+    if tr >= ln_j_min {
         return PlasticState(f, damage);
     }
-    let stretch = exp(min(tr, 0.0) / 3.0);
-    return PlasticState(d.u * transpose(d.v) * stretch, 1.0);
+    let eps_new = eps - vec3<f32>((tr - ln_j_min) / 3.0);
+    return PlasticState(d.u * sim_diag3(exp(eps_new)) * transpose(d.v), damage);
 }
 
 // τ = U diag(g 2μ ε̂ + h κ tr ε) Uᵀ, g = 1 − d, h = g in tension and 1 in compression.

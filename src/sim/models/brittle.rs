@@ -15,9 +15,12 @@
 //!   uniaxial tension the stress is σ_c e^{−(y − 1)/s} after the peak);
 //! - stress τ = U diag(g 2μ ε̂_i + h κ tr ε) Uᵀ with g = 1 − d on the deviatoric part and
 //!   h = g in tension (tr ε > 0) but 1 in compression;
+//! - compaction: a volumetric compression past θ (ln J < ln(1 − θ)) is plastic, so an
+//!   impact crushes the material it compresses instead of storing its energy to spring
+//!   back (the fruit's cells burst; NACC's cap does the same);
 //! - a particle with d ≥ [`BROKEN`] is rubble: d = 1, and F keeps only its rotation and
-//!   any compression (F = J^{1/3} U Vᵀ with J ≤ 1), so a crack's particles neither pull
-//!   nor stretch their Gaussians into streaks.
+//!   a compression of at most θ (F = J^{1/3} U Vᵀ with 1 − θ ≤ J ≤ 1): a crack's particles
+//!   neither pull nor stretch their Gaussians into streaks.
 
 use glam::{DMat3, DVec3};
 use schemars::JsonSchema;
@@ -41,6 +44,8 @@ pub struct Brittle {
     pub softening: f64,
     /// Seed of the strength draw.
     pub seed: u32,
+    /// The largest volumetric compression θ held elastically (past it, compaction).
+    pub compaction: f64,
     /// Grid spacing at which σ̄ is the mean strength; `None`: no size effect.
     pub reference_dx: Option<f64>,
     /// The size effect's factor on every strength at the simulation's spacing
@@ -69,6 +74,11 @@ pub struct BrittleSpec {
     /// Seed of the strength draw (default 0): the same seed, the same weak spots.
     #[serde(default)]
     pub seed: u32,
+    /// The largest volumetric compression θ in (0, 1) the material holds elastically
+    /// (default 0.1): it carries a pressure up to about κθ and compacts (crushes) beyond
+    /// it, so an impact's energy goes into the crushed zone instead of a rebound.
+    #[serde(default = "default_compaction")]
+    pub compaction: f64,
     /// Spacing Δx in m at which `strength` is the mean (> 0; needs `weibull_modulus`): on
     /// another grid every strength is scaled by (reference_dx / Δx)^{3/m}, Weibull's size
     /// effect (smaller samples are stronger). Absent: the same strengths at every Δx.
@@ -78,6 +88,10 @@ pub struct BrittleSpec {
 
 fn default_softening() -> f64 {
     1.0
+}
+
+fn default_compaction() -> f64 {
+    0.1
 }
 
 /// lowbias32 (Wellons' integer hash): a particle's index and seed to 32 well-mixed bits.
@@ -164,10 +178,10 @@ impl PlasticLaw for Brittle {
     const ALPHA: &'static str = "damage d ∈ [0, 1] (1: broken through)";
     const ALPHA_IS_LOG_JP: bool = false;
     // params: σ₀ (Weibull scale with the size factor), 1/m (0: uniform), s, the seed's key
-    // (an integer below 2²⁴).
+    // (an integer below 2²⁴), ln(1 − θ) (the compaction's floor on ln J).
     const WGSL: PlasticWgsl = PlasticWgsl {
         return_map: "return brittle_return_map(f, alpha, particle, m.mu, m.kappa, m.params[0], \
-                     m.params[1], m.params[2], u32(m.params[3]));",
+                     m.params[1], m.params[2], u32(m.params[3]), m.params[4]);",
         damage: "clamp(alpha, 0.0, 1.0)",
         stress_scale: "1.0",
         kirchhoff: Some("brittle_kirchhoff(f, alpha, m.mu, m.kappa)"),
@@ -202,6 +216,13 @@ impl PlasticLaw for Brittle {
             soft,
             "a softening ratio > 0",
         )?;
+        let theta = spec.compaction;
+        ParamError::check(
+            theta.is_finite() && theta > 0.0 && theta < 1.0,
+            "compaction",
+            theta,
+            "a volumetric compression θ in (0, 1)",
+        )?;
         if let Some(h) = spec.reference_dx {
             ParamError::check(
                 h.is_finite() && h > 0.0,
@@ -222,6 +243,7 @@ impl PlasticLaw for Brittle {
             weibull_modulus: spec.weibull_modulus,
             softening: soft,
             seed: spec.seed,
+            compaction: theta,
             reference_dx: spec.reference_dx,
             size_factor: 1.0,
         })
@@ -231,7 +253,9 @@ impl PlasticLaw for Brittle {
         self.return_map_at(f_trial, alpha, lame, 0)
     }
 
-    /// d ← max(d, D(y)); past [`BROKEN`], rubble: d = 1, F = U diag(e^{min(tr ε, 0)/3}) Vᵀ.
+    /// d ← max(d, D(y)); a compression past θ compacts (ε loses (tr ε − ln(1 − θ))/3 per
+    /// axis); past [`BROKEN`], rubble: d = 1, F = J^{1/3} U Vᵀ with ln J = tr ε clamped to
+    /// [ln(1 − θ), 0].
     fn return_map_at(
         &self,
         f_trial: DMat3,
@@ -244,12 +268,18 @@ impl PlasticLaw for Brittle {
         let peak = Self::effective_stresses(eps, lame).max_element().max(0.0);
         let y = peak / self.strength_of(particle);
         let d = alpha.max(damage_at(y, self.softening)).clamp(0.0, 1.0);
-        if d < BROKEN {
+        let tr = eps.x + eps.y + eps.z;
+        let ln_j_min = (1.0 - self.compaction).ln();
+        if d >= BROKEN {
+            let ln_j = tr.clamp(ln_j_min, 0.0);
+            return (s.u * s.v.transpose() * (ln_j / 3.0).exp(), 1.0);
+        }
+        if tr >= ln_j_min {
             return (f_trial, d);
         }
-        let tr = eps.x + eps.y + eps.z;
-        let stretch = (tr.min(0.0) / 3.0).exp();
-        (s.u * s.v.transpose() * stretch, 1.0)
+        let eps_new = eps - DVec3::splat((tr - ln_j_min) / 3.0);
+        let sigma = DVec3::new(eps_new.x.exp(), eps_new.y.exp(), eps_new.z.exp());
+        (s.u * DMat3::from_diagonal(sigma) * s.v.transpose(), d)
     }
 
     fn damage(&self, alpha: f64) -> f64 {
@@ -281,7 +311,7 @@ impl PlasticLaw for Brittle {
             inv_m as f32,
             self.softening as f32,
             seed_key(self.seed) as f32,
-            0.0,
+            (1.0 - self.compaction).ln() as f32,
             0.0,
             0.0,
             0.0,
@@ -305,6 +335,7 @@ mod tests {
             weibull_modulus: None,
             softening,
             seed: 0,
+            compaction: 0.05,
             reference_dx: None,
             size_factor: 1.0,
         }
@@ -441,8 +472,8 @@ mod tests {
         }
     }
 
-    /// A broken particle is rubble: d = 1, no tension, no shear, its compression kept,
-    /// its rotation kept.
+    /// A broken particle is rubble: d = 1, no tension, no shear, its compression kept up
+    /// to θ (compacted beyond), its rotation kept.
     #[test]
     fn broken_particles_keep_rotation_and_compression_only() {
         let l = lame();
@@ -456,9 +487,10 @@ mod tests {
             assert_eq!(d, 1.0);
             let j = f_new.determinant();
             let tr = eps.x + eps.y + eps.z;
-            assert!((j - tr.min(0.0).exp()).abs() < 1e-9, "J {j} for tr ε {tr}");
+            let ln_j = tr.clamp(0.95f64.ln(), 0.0);
+            assert!((j - ln_j.exp()).abs() < 1e-9, "J {j} for tr ε {tr}");
             let tau = law.kirchhoff(ElasticModel::StvkHencky, f_new, d, &l);
-            let want = l.kappa() * tr.min(0.0);
+            let want = l.kappa() * ln_j;
             let off = tau - DMat3::IDENTITY * want;
             assert!(off.to_cols_array().iter().all(|x| x.abs() < 1e-8), "{tau}");
             // The rotation is polar(F)'s: F_new = J^{1/3} U Vᵀ.
@@ -468,6 +500,38 @@ mod tests {
                 .iter()
                 .all(|x| x.abs() < 1e-9));
         }
+    }
+
+    /// An intact particle compressed past θ compacts: ln J lands on ln(1 − θ), its
+    /// deviatoric strain and frame are kept, its damage too; less compression is elastic.
+    #[test]
+    fn compression_past_theta_compacts() {
+        let l = lame();
+        let law = uniform(1e6, 1.0);
+        let floor = 0.95f64.ln();
+        let mut r = SplitMix64::new(8);
+        let (mut compacted, mut elastic) = (0, 0);
+        for _ in 0..500 {
+            let (u, v) = (rotation(&mut r), rotation(&mut r));
+            let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.7) * 0.3;
+            let f = u * diag(eps) * v.transpose();
+            let (f_new, d) = law.return_map(f, 0.25, &l);
+            assert_eq!(d, 0.25);
+            let tr = eps.x + eps.y + eps.z;
+            if tr >= floor {
+                elastic += 1;
+                assert_eq!(f_new, f);
+                continue;
+            }
+            compacted += 1;
+            assert!((f_new.determinant().ln() - floor).abs() < 1e-9);
+            let back = u.transpose() * f_new * v;
+            let got = DVec3::new(back.x_axis.x, back.y_axis.y, back.z_axis.z);
+            let eps_new = DVec3::new(got.x.ln(), got.y.ln(), got.z.ln());
+            let dev = |e: DVec3| e - DVec3::splat((e.x + e.y + e.z) / 3.0);
+            assert!((dev(eps_new) - dev(eps)).abs().max_element() < 1e-9);
+        }
+        assert!(compacted > 100 && elastic > 50, "{compacted} {elastic}");
     }
 
     /// The strengths have the Weibull distribution asked for: mean σ̄, the CDF's median at
@@ -480,6 +544,7 @@ mod tests {
             weibull_modulus: Some(6.0),
             softening: 1.0,
             seed: 3,
+            compaction: 0.05,
             reference_dx: Some(0.02),
             size_factor: 1.0,
         };
@@ -513,6 +578,9 @@ mod tests {
         let err = Brittle::from_spec(spec(r#"{"strength": 1, "reference_dx": 0.01}"#), 1e3, 0.3)
             .unwrap_err();
         assert_eq!(err.field, "reference_dx");
+        let err =
+            Brittle::from_spec(spec(r#"{"strength": 1, "compaction": 1}"#), 1e3, 0.3).unwrap_err();
+        assert_eq!(err.field, "compaction");
         assert!(
             Brittle::from_spec(spec(r#"{"strength": 1, "weibull_modulus": 0}"#), 1e3, 0.3).is_err()
         );
