@@ -9,7 +9,8 @@ all frames (the fastest particle over the drop speed).
 
 Usage:
   python3 benches/shatter/brittle_sweep.py scenes OUT_DIR [RUN ...]
-      writes OUT_DIR/NAME.json for each RUN, FLESH_STRENGTH:SPEED:DX[:FRAMES]
+      writes OUT_DIR/NAME.json for each RUN, FLESH_STRENGTH:SPEED:DX[:FRAMES[:SEED_SHIFT]]
+      (SEED_SHIFT is added to every brittle material's seed: another draw of strengths)
       (default: the 4 x 3 grid around the shipped point, strengths x 0.75, 1, 1.25, 1.5 and
       speeds x 0.75, 0.875, 1, and the shipped point at dx/1.5);
   python3 benches/shatter/brittle_sweep.py run SPLATTER OUT_DIR
@@ -39,13 +40,14 @@ def brittle_materials(obj):
         yield r["material"]
 
 
-def variant(scene, flesh, speed, dx, frames):
+def variant(scene, flesh, speed, dx, frames, shift=0):
     v = copy.deepcopy(scene)
     melon = next(o for o in v["objects"] if o.get("name") == "watermelon")
     base = melon["physics"]["material"]["strength"]
     for m in brittle_materials(melon):
         if m.get("model") == "brittle":
             m["strength"] = round(m["strength"] * flesh / base, 6)
+            m["seed"] = m.get("seed", 0) + shift
     melon["physics"]["velocity"] = [0, 0, -speed]
     v["simulation"]["dx"] = dx
     v["output"]["frames"] = frames
@@ -53,8 +55,9 @@ def variant(scene, flesh, speed, dx, frames):
     return v
 
 
-def name_of(flesh, speed, dx, frames):
-    return f"s{flesh:g}_v{speed:g}_dx{dx:g}_f{frames}"
+def name_of(flesh, speed, dx, frames, shift=0):
+    seed = f"_seed+{shift}" if shift else ""
+    return f"s{flesh:g}_v{speed:g}_dx{dx:g}_f{frames}{seed}"
 
 
 def make(scenes, out, runs):
@@ -73,8 +76,9 @@ def make(scenes, out, runs):
         parts = r.split(":")
         flesh, speed, dx = float(parts[0]), float(parts[1]), float(parts[2])
         frames = int(parts[3]) if len(parts) > 3 else frames0
-        path = os.path.join(out, name_of(flesh, speed, dx, frames) + ".json")
-        json.dump(variant(scene, flesh, speed, dx, frames), open(path, "w"), indent=1)
+        shift = int(parts[4]) if len(parts) > 4 else 0
+        path = os.path.join(out, name_of(flesh, speed, dx, frames, shift) + ".json")
+        json.dump(variant(scene, flesh, speed, dx, frames, shift), open(path, "w"), indent=1)
         print(path)
 
 
