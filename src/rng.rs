@@ -28,6 +28,15 @@ impl SplitMix64 {
     pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.uniform() as f32
     }
+
+    /// A rotation from a normalised random quaternion (the models' unit tests; not
+    /// uniform over the rotations, which they do not need).
+    #[cfg(test)]
+    pub(crate) fn rotation(&mut self) -> glam::DMat3 {
+        let v = glam::DVec3::new(self.uniform(), self.uniform(), self.uniform()) - 0.5;
+        let q = glam::DQuat::from_xyzw(v.x, v.y, v.z, self.uniform() - 0.5);
+        glam::DMat3::from_quat(q.normalize())
+    }
 }
 
 #[cfg(test)]

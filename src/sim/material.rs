@@ -120,13 +120,9 @@ impl Material {
     }
 
     /// The plastic step after the F update: the return mapping of the plastic model
-    /// (docs/method.md §4), (F, α) unchanged without one.
-    pub fn plasticity(&self, f_trial: DMat3, alpha: f64) -> (DMat3, f64) {
-        self.plastic.return_map(f_trial, alpha, &self.lame)
-    }
-
-    /// [`Self::plasticity`] of particle `particle` (its index in the simulation's
-    /// particle arrays), for laws whose particles differ (a brittle material's strengths).
+    /// (docs/method.md §4), (F, α) unchanged without one. `particle` is the particle's
+    /// index in the simulation's particle arrays, which a law whose particles differ keys
+    /// them by (a brittle material's strengths).
     pub fn plasticity_at(&self, f_trial: DMat3, alpha: f64, particle: u32) -> (DMat3, f64) {
         self.plastic
             .return_map_at(f_trial, alpha, &self.lame, particle)

@@ -323,7 +323,6 @@ impl PlasticLaw for Brittle {
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
-    use glam::DQuat;
 
     fn lame() -> Lame {
         Lame::from_young_poisson(1000.0, 0.35)
@@ -339,11 +338,6 @@ mod tests {
             reference_dx: None,
             size_factor: 1.0,
         }
-    }
-
-    fn rotation(r: &mut SplitMix64) -> DMat3 {
-        let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
-        DMat3::from_quat(DQuat::from_xyzw(v.x, v.y, v.z, r.uniform() - 0.5).normalize())
     }
 
     fn diag(eps: DVec3) -> DMat3 {
@@ -433,7 +427,7 @@ mod tests {
         let mut r = SplitMix64::new(5);
         for _ in 0..2000 {
             let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5) * 0.4;
-            let f = rotation(&mut r) * diag(eps) * rotation(&mut r);
+            let f = r.rotation() * diag(eps) * r.rotation();
             let mut prev = f64::INFINITY;
             for k in 0..=10 {
                 let psi = Brittle::energy(f, k as f64 / 10.0, &l);
@@ -450,7 +444,7 @@ mod tests {
         // τ = (∂ψ/∂F) Fᵀ at a damaged state, by central differences.
         let law = uniform(100.0, 1.0);
         for d in [0.0, 0.4, 0.9] {
-            let f = rotation(&mut r) * diag(DVec3::new(0.08, -0.03, 0.02));
+            let f = r.rotation() * diag(DVec3::new(0.08, -0.03, 0.02));
             let tau = law.kirchhoff(ElasticModel::StvkHencky, f, d, &l);
             let h = 1e-6;
             let mut p = DMat3::ZERO;
@@ -480,7 +474,7 @@ mod tests {
         let law = uniform(10.0, 0.2);
         let mut r = SplitMix64::new(6);
         for _ in 0..200 {
-            let (u, v) = (rotation(&mut r), rotation(&mut r));
+            let (u, v) = (r.rotation(), r.rotation());
             let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.3) * 0.5;
             let f = u * diag(eps) * v.transpose();
             let (f_new, d) = law.return_map(f, 1.0, &l);
@@ -512,7 +506,7 @@ mod tests {
         let mut r = SplitMix64::new(8);
         let (mut compacted, mut elastic) = (0, 0);
         for _ in 0..500 {
-            let (u, v) = (rotation(&mut r), rotation(&mut r));
+            let (u, v) = (r.rotation(), r.rotation());
             let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.7) * 0.3;
             let f = u * diag(eps) * v.transpose();
             let (f_new, d) = law.return_map(f, 0.25, &l);

@@ -141,7 +141,6 @@ impl PlasticLaw for DruckerPrager {
 mod tests {
     use super::*;
     use crate::rng::SplitMix64;
-    use glam::DQuat;
 
     fn lame() -> Lame {
         Lame::from_young_poisson(1e5, 0.3)
@@ -152,11 +151,6 @@ mod tests {
             friction_angle: phi_deg.to_radians(),
             cohesion,
         }
-    }
-
-    fn rotation(r: &mut SplitMix64) -> DMat3 {
-        let v = DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5;
-        DMat3::from_quat(DQuat::from_xyzw(v.x, v.y, v.z, r.uniform() - 0.5).normalize())
     }
 
     /// y(ε) = ‖ε̂‖ + (3κ/2μ) α_dp (tr ε − tr ε_apex): the cone in strain, ≤ 0 inside.
@@ -191,8 +185,8 @@ mod tests {
         for dp in [sand(20.0, 0.0), sand(35.0, 0.0), sand(35.0, 50.0)] {
             for _ in 0..3000 {
                 let eps = (DVec3::new(r.uniform(), r.uniform(), r.uniform()) - 0.5) * 0.1;
-                let u = rotation(&mut r);
-                let v = rotation(&mut r);
+                let u = r.rotation();
+                let v = r.rotation();
                 let sigma = DVec3::new(eps.x.exp(), eps.y.exp(), eps.z.exp());
                 let f = u * DMat3::from_diagonal(sigma) * v.transpose();
                 let (f_new, alpha) = dp.return_map(f, 0.25, &l);
