@@ -113,8 +113,9 @@ impl Material {
         self.plastic.initial_alpha()
     }
 
-    /// Kirchhoff stress τ(F) at hardening state α (docs/method.md §3): the elastic model's,
-    /// times the plastic model's hardening factor.
+    /// Kirchhoff stress τ(F) at hardening state α (docs/method.md §3): the elastic model's
+    /// times the plastic law's hardening factor, or the law's own (a brittle material's
+    /// split stress).
     pub fn kirchhoff(&self, f: DMat3, alpha: f64) -> DMat3 {
         self.plastic.kirchhoff(self.elastic, f, alpha, &self.lame)
     }
