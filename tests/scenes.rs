@@ -483,15 +483,43 @@ fn the_flat_watermelon_drop_shatters() {
     }
 }
 
+/// An art-directed fracture (`scenes/voronoi_fracture.json`): a sphere too strong to break
+/// on its own, weakened along the faces of 5 Voronoi cells, breaks into about that many
+/// pieces (3 to 7: two chunks that touch count as one) in every frame after its impact.
+#[test]
+fn the_voronoi_sphere_breaks_into_its_cells() {
+    const FRAMES: usize = 10;
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/voronoi_fracture.json");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("voronoi");
+    render(&scene, &out, &format!("0..{FRAMES}"), &["--fragments"]);
+    let rows = object_rows(&out, "fruit", &["pieces", "largest_share"]);
+    eprintln!("voronoi_fracture: {rows:?}");
+    assert_eq!(rows.len(), FRAMES);
+    for (frame, r) in rows.iter().enumerate().skip(2) {
+        assert!(
+            (3.0..=7.0).contains(&r[0]),
+            "frame {frame}: {} pieces",
+            r[0]
+        );
+        assert!(r[1] < 0.5, "frame {frame}: largest share {}", r[1]);
+    }
+}
+
 /// The watermelon's rows of `out/fragments.csv`, the named columns of each.
 fn fruit_rows(out: &Path, columns: &[&str]) -> Vec<Vec<f64>> {
+    object_rows(out, "watermelon", columns)
+}
+
+/// Object `object`'s rows of `out/fragments.csv`, the named columns of each.
+fn object_rows(out: &Path, object: &str, columns: &[&str]) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(out.join("fragments.csv")).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
     lines
         .map(|l| l.split(',').collect::<Vec<&str>>())
-        .filter(|f| f[col("object")] == "watermelon")
+        .filter(|f| f[col("object")] == object)
         .map(|f| columns.iter().map(|c| f[col(c)].parse().unwrap()).collect())
         .collect()
 }

@@ -478,6 +478,10 @@ pub struct RegionSpec {
     /// Gaussians carrying this label (fill particles take their nearest Gaussian's label).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub label: Option<String>,
+    /// Particles near the faces of a Voronoi partition of the object into `cells` cells:
+    /// given a weaker material, the faces become the cracks of an art-directed fracture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub voronoi: Option<VoronoiFaces>,
     /// The region's material (NACC, fixed corotated or Neo-Hookean).
     pub material: MaterialSpec,
     /// Colour (linear RGB in [0, 1]) of the region's fill particles. Default: the colour of
@@ -501,6 +505,20 @@ pub struct ShellRange {
 pub struct BoxRegion {
     pub lo: [f64; 3],
     pub hi: [f64; 3],
+}
+
+/// The faces of a Voronoi partition of an object's particles (at rest).
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct VoronoiFaces {
+    /// Number of cells N (2 to 256): the pieces a fracture along every face would give.
+    pub cells: u32,
+    /// Half-thickness of a face in world units (> 0): particles within this distance of
+    /// the plane between their nearest cell centre and another are selected.
+    pub width: f64,
+    /// Seed of the cell centres (default 0): the same seed, the same partition.
+    #[serde(default)]
+    pub seed: u64,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]

@@ -315,7 +315,8 @@ impl Bodies {
         let obj = &scene.objects[i];
         let name = obj.display_name(i);
         let physics = obj.physics.as_ref().expect("simulated");
-        let (m_index, density, regions) = self.add_materials(scene, i, &part, grid.dx, spec.cfl)?;
+        let (m_index, density, mut regions) =
+            self.add_materials(scene, i, &part, grid.dx, spec.cfl)?;
         let filled = match physics.fill.as_ref().and_then(|f| f.spacing(grid.dx)) {
             None => None,
             Some(h) => Some(fill_object(scene, i, &part, h, grid.dx, Cover::Interior)?),
@@ -351,6 +352,7 @@ impl Bodies {
             part.means.iter().map(|m| m.as_dvec3()).sum::<DVec3>() / part.len().max(1) as f64
         };
         let (v0, w0) = (vec3(physics.velocity), vec3(physics.angular_velocity));
+        regions.place(o, i, xs)?;
         let region = assign_regions(obj, &regions, &cloud, &part);
         let start = self.particles.len();
         for ((x, volume), r) in xs.iter().zip(volumes).zip(&region) {
