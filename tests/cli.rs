@@ -1077,7 +1077,16 @@ fn watchdog_stops_an_unstable_simulation() {
     let line = expect_late_error(&out);
     assert_mentions(
         &line,
-        &["simulation stopped", "before frame", "first at step", "Δt"],
+        &[
+            "simulation stopped",
+            "before frame",
+            "first at step",
+            "Δt",
+            "the first: particle",
+            "objects[0]",
+            "m/s",
+            "an instability",
+        ],
     );
     for name in list(&dir.path().join("frames")) {
         assert!(

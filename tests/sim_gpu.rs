@@ -547,7 +547,8 @@ fn gpu_active_blocks_are_the_blocks_the_stencils_reach() {
 }
 
 /// The watchdog counts a particle that turns non-finite or leaves the grid once per step,
-/// names the first step that counted since the last read, and starts over after a read.
+/// names the first step that counted since the last read and the particle, keeps the
+/// largest speed, and starts over after a read.
 #[test]
 fn gpu_watchdog_counts_and_names_the_first_step() {
     for gpu in gpus() {
@@ -564,6 +565,9 @@ fn gpu_watchdog_counts_and_names_the_first_step() {
                 (quiet.nonfinite, quiet.escaped, quiet.first_step),
                 (0, 0, None)
             );
+            assert_eq!(quiet.first_particle, None);
+            // Four steps of 1e-4 s from rest: at most g · 4e-4 s.
+            assert!(quiet.speed_max < 0.01, "{path:?}: {}", quiet.speed_max);
         }
         // A lone particle thrown at 1000 m/s leaves the grid in step 0 (it is still inside
         // during that step) and is counted from step 1 on: 4 of 5 steps, first step 1. After
@@ -586,6 +590,15 @@ fn gpu_watchdog_counts_and_names_the_first_step() {
             sim.step(&gpu, 5).unwrap();
             let w = sim.take_watchdog(&gpu).unwrap();
             let counted = (w.escaped, w.fixed_point_range, w.first_step);
+            if path != P2gPath::Fixed {
+                // It moved at 1000 m/s in step 0, the only step it was on the grid.
+                assert_eq!(w.first_particle, Some(n as u32), "{path:?}");
+                assert!(
+                    (w.speed_max - 1000.0).abs() < 1.0,
+                    "{path:?}: {}",
+                    w.speed_max
+                );
+            }
             let again = || {
                 sim.step(&gpu, 2).unwrap();
                 let w = sim.take_watchdog(&gpu).unwrap();

@@ -17,9 +17,10 @@ use crate::render::{GpuRenderer, Splats};
 use crate::scene::kinematic::KinematicObject;
 use crate::scene::lighting::SceneLighting;
 use crate::scene::simulation::SimulationSetup;
-use crate::scene::{self, BuildReport};
+use crate::scene::{self, BuildReport, Scene};
 use crate::sim::frame::FrameError;
 use crate::sim::gpu::{GpuSim, P2gPath, P2gRace, Watchdog};
+use crate::sim::models::PlasticModel;
 use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
 use crate::splat::sh::ShRotator;
 
@@ -400,7 +401,13 @@ impl<'a> Simulation<'a> {
 
     /// The steps that lead to `frame` (none for the first simulated frame), then the pool
     /// fitted for the next frame; a watchdog count stops the run.
-    fn advance_to(&mut self, gpu: &GpuContext, frame: u32, first: u32) -> Result<()> {
+    fn advance_to(
+        &mut self,
+        gpu: &GpuContext,
+        scene: &Scene,
+        frame: u32,
+        first: u32,
+    ) -> Result<()> {
         let s = self.setup;
         let w = if frame > first {
             // The moving colliders' clock: this frame's steps start at frame − 1.
@@ -416,9 +423,45 @@ impl<'a> Simulation<'a> {
         // Sparse grid: room for the active region to double before the next read.
         self.sim.fit_pool(gpu, &w)?;
         if w.failed() {
-            bail!("{}", watchdog_message(frame, w, s));
+            let culprit = match w.first_particle {
+                Some(p) => Some(self.describe_particle(gpu, scene, p)?),
+                None => None,
+            };
+            bail!("{}", watchdog_message(frame, w, s, culprit));
         }
         Ok(())
+    }
+
+    /// Particle `p` as a failure names it: its object, material, where it is and how fast
+    /// it moves (read back from the GPU); and its speed.
+    fn describe_particle(&self, gpu: &GpuContext, scene: &Scene, p: u32) -> Result<(String, f64)> {
+        let s = self.setup;
+        let state = self.sim.read_particles(gpu, &s.particles)?;
+        let p = p as usize;
+        let object =
+            s.bodies
+                .iter()
+                .find(|b| b.particles.contains(&p))
+                .map_or("?".to_string(), |b| {
+                    format!(
+                        "objects[{}] ({})",
+                        b.object,
+                        scene.objects[b.object].display_name(b.object)
+                    )
+                });
+        let m = &s.materials[s.particles.material[p] as usize];
+        let v3 = |x: DVec3| format!("[{:.3}, {:.3}, {:.3}]", x.x, x.y, x.z);
+        let text = format!(
+            "particle {p} of {object}, material {} ({}), at {} m moving {} m/s",
+            s.particles.material[p],
+            match m.plastic_model() {
+                PlasticModel::None => m.elastic_model().def().name,
+                law => law.name(),
+            },
+            v3(state.x[p]),
+            v3(state.v[p])
+        );
+        Ok((text, state.v[p].length()))
     }
 
     /// The simulated and kinematic Gaussians of the renderer's buffer, moved to `seconds`.
@@ -471,7 +514,7 @@ impl Frames<'_> {
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
             if let Some(sim) = sim.as_deref_mut() {
-                sim.advance_to(self.gpu, frame, first_sim)?;
+                sim.advance_to(self.gpu, &self.job.scene, frame, first_sim)?;
                 if self.job.opts.checkpoint_every > 0
                     && frame > first_sim
                     && frame % self.job.opts.checkpoint_every == 0
@@ -564,7 +607,18 @@ impl Frames<'_> {
 
 /// The watchdog's stop message: frame, what was counted, the likely cause. Frames
 /// already written are complete (each was renamed into place).
-fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
+fn watchdog_message(
+    frame: u32,
+    w: Watchdog,
+    s: &SimulationSetup,
+    culprit: Option<(String, f64)>,
+) -> String {
+    let first = culprit
+        .as_ref()
+        .map_or(String::new(), |(c, _)| format!("; the first: {c}"));
+    // A particle that crossed more than a cell a step did not leave because the domain is
+    // small: the step blew up (the CFL condition keeps a particle well under a cell).
+    let cells_a_step = culprit.map_or(0.0, |(_, speed)| speed * s.params.dt / s.grid.dx);
     let n = s.steps_per_frame;
     let steps = match w.first_step {
         // Frame f shows the state after f·n steps: the batch read before it ran steps
@@ -578,7 +632,7 @@ fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
     };
     if w.nonfinite > 0 {
         format!(
-            "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}); likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
+            "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}){first}; likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
             w.nonfinite, s.params.dt, s.grid.dx
         )
     } else if w.fixed_point_range > 0 {
@@ -593,8 +647,13 @@ fn watchdog_message(frame: u32, w: Watchdog, s: &SimulationSetup) -> String {
     } else {
         let (lo, hi) = (s.grid.lo, s.grid.hi());
         let v = |x: DVec3| format!("[{:.3}, {:.3}, {:.3}]", x.x, x.y, x.z);
+        let cause = if cells_a_step > 1.0 {
+            format!("an instability, not the domain's size: it crossed {cells_a_step:.3e} cells a step (Δt {:.3e} s, Δx {}) where the CFL condition keeps a particle under one; try a smaller simulation.cfl or simulation.dt", s.params.dt, s.grid.dx)
+        } else {
+            "simulation.domain too small for the motion, or Δt too large".to_string()
+        };
         format!(
-            "simulation stopped: {} particle-steps left the domain {steps} ({} .. {}); likely cause: simulation.domain too small for the motion, or Δt too large",
+            "simulation stopped: {} particle-steps left the domain {steps} ({} .. {}){first}; likely cause: {cause}",
             w.escaped,
             v(lo),
             v(hi)

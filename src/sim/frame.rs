@@ -15,7 +15,7 @@ pub enum FrameError {
 }
 
 /// What running a frame's substeps took.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FrameSteps {
     /// The watchdog of the run that counted (the last one).
     pub watchdog: Watchdog,

@@ -31,6 +31,8 @@ pub use super::step::layout::{
 };
 /// Bytes of the largest per-particle record (F, C: `mat3x3<f32>`), which sizes the pages.
 const MAT3_BYTES: u64 = 48;
+/// The watchdog's counters (`flags` of `shaders/sim/step/g2p.wgsl`): 12 words.
+const WATCHDOG_BYTES: u64 = 48;
 use super::codes::BLOCK;
 
 mod p2g_path;
@@ -354,7 +356,7 @@ impl GpuSim {
                     | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             }),
-            flags: zeroed(gpu, "sim watchdog flags", 32),
+            flags: zeroed(gpu, "sim watchdog flags", WATCHDOG_BYTES),
             damage: zeroed(
                 gpu,
                 "sim damage field",
@@ -718,16 +720,16 @@ impl GpuSim {
     pub fn take_watchdog(&self, gpu: &GpuContext) -> Result<Watchdog, GpuError> {
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sim watchdog readback"),
-            size: 32,
+            size: WATCHDOG_BYTES,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&self.buffers.flags, 0, &staging, 0, Some(32));
+        enc.copy_buffer_to_buffer(&self.buffers.flags, 0, &staging, 0, Some(WATCHDOG_BYTES));
         enc.clear_buffer(&self.buffers.flags, 0, None);
         gpu.queue.submit([enc.finish()]);
         let bytes = read_buffer(gpu, &staging)?;
-        let v: [u32; 8] = bytemuck::pod_read_unaligned(&bytes[..32]);
+        let v: [u32; 12] = bytemuck::pod_read_unaligned(&bytes[..WATCHDOG_BYTES as usize]);
         Ok(Watchdog {
             nonfinite: v[0],
             escaped: v[1],
@@ -736,6 +738,8 @@ impl GpuSim {
             active_blocks_max: v[4],
             pool_overflow: v[5],
             fixed_point_range: v[6],
+            speed_max: f32::from_bits(v[7]),
+            first_particle: (v[8] != 0).then_some(!v[8]),
         })
     }
 

@@ -17,8 +17,11 @@
 // The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
 // F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
 // counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
-// [3] steps since the last read (compact_blocks.wgsl). Read and cleared once per frame.
-@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 4>;
+// [3] steps since the last read (compact_blocks.wgsl); [7] the largest particle speed
+// (the bits of a non-negative f32, which order as the floats do); [8] the bitwise NOT of
+// the lowest index of a particle counted in [0] or [1] (0: none), so that a failure can
+// name it. Read and cleared once per frame.
+@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 12>;
 // What prepare.wgsl would compute for the next step, so that only the first step of a
 // submission runs it: the affine term (common.wgsl, affine_term), and on the gather path
 // (NEXT_KEYS, a constant G2p prepends) the base-cell sort key and the particle's index.
@@ -41,10 +44,20 @@ fn leave_key(p: u32, x: vec3<f32>) {
     }
 }
 
-fn count_failure(slot: u32) {
+fn count_failure(slot: u32, p: u32) {
     atomicAdd(&flags[slot], 1u);
+    atomicMax(&flags[8], ~(page.base + p));
     // compact_blocks.wgsl has already counted this step
     atomicMax(&flags[2], ~(atomicLoad(&flags[3]) - 1u));
+}
+
+// The largest speed of the frame: most particles only read it, so that the one word is
+// not written by every particle of every step.
+fn record_speed(speed: f32) {
+    let bits = bitcast<u32>(speed);
+    if bits > atomicLoad(&flags[7]) {
+        atomicMax(&flags[7], bits);
+    }
 }
 
 @compute @workgroup_size(256)
@@ -60,9 +73,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let st = grid_stencil(xm.xyz);
     if !st.ok {
         if sim_is_finite3(xm.xyz) {
-            count_failure(1u);
+            count_failure(1u, p);
         } else {
-            count_failure(0u);
+            count_failure(0u, p);
         }
         let v = vv.xyz + consts.gravity * consts.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
@@ -126,6 +139,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     deformation[p] = f_new;
     affine[p] = affine_term(m, f_new, plastic.alpha, c, xm.w, vv.w);
     if !(sim_is_finite3(v_new) && sim_is_finite_mat3(f_new)) {
-        count_failure(0u);
+        count_failure(0u, p);
+    } else {
+        record_speed(length(v_new));
     }
 }

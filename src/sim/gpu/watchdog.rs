@@ -3,7 +3,7 @@
 //! the fixed-point P2G's range.
 
 /// What the watchdog counted (particle-steps, summed over the steps since the last read).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Watchdog {
     pub nonfinite: u32,
     pub escaped: u32,
@@ -17,6 +17,10 @@ pub struct Watchdog {
     /// Particles past the fixed-point P2G's speed bound (`GpuStep::speed_bound`; they added
     /// nothing to the grid: the steps are wrong).
     pub fixed_point_range: u32,
+    /// The largest particle speed of those steps (m/s; finite particles only).
+    pub speed_max: f32,
+    /// The lowest index of a particle counted as non-finite or escaped.
+    pub first_particle: Option<u32>,
 }
 
 impl Watchdog {
