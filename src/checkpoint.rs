@@ -12,7 +12,9 @@
 //! | 8 | scene hash ([`scene_hash`]) |
 //! | 4 | flags: bit 0 = written in deterministic mode |
 //! | 4 | frame index f: the state after f · steps-per-frame steps |
-//! | 4 | steps per frame |
+//! | 4 | steps of the first frame |
+//! | 8 | the largest particle speed of the last frame's steps, f64 (the next frame's Δt follows it) |
+//! | 8 | steps taken since frame 0 |
 //! | 8 | particle count n |
 //! | n · 100 | per particle: x (3 f32), v (3 f32), F (9 f32, column-major), C (9 f32), α (f32) |
 //! | 8 | FNV-1a 64 of every byte before it |
@@ -34,16 +36,17 @@ use crate::output::{write_atomically, OutputError};
 use crate::render::Splats;
 use crate::scene::simulation::SimulationSetup;
 use crate::scene::Scene;
+use crate::sim::time_step::Clock;
 use crate::sim::Particles;
 
 /// The first 8 bytes of a checkpoint.
 pub const MAGIC: &[u8; 8] = b"SPLTCKPT";
 /// Bumped whenever the layout changes; other versions are refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 pub use crate::PROGRAM_VERSION;
 
 const VERSION_BYTES: usize = 32;
-const HEADER_BYTES: usize = 8 + 4 + VERSION_BYTES + 8 + 4 + 4 + 4 + 8;
+const HEADER_BYTES: usize = 8 + 4 + VERSION_BYTES + 8 + 4 + 4 + 4 + 8 + 8 + 8;
 const PARTICLE_BYTES: usize = 25 * 4;
 const FLAG_DETERMINISTIC: u32 = 1;
 
@@ -93,6 +96,8 @@ pub struct Checkpoint {
     /// The state is the one frame `frame` shows.
     pub frame: u32,
     pub steps_per_frame: u32,
+    /// What the next frame's Δt is chosen from, and the steps so far.
+    pub clock: Clock,
     pub x: Vec<Vec3>,
     pub v: Vec<Vec3>,
     pub f: Vec<Mat3>,
@@ -108,12 +113,14 @@ impl Checkpoint {
         deterministic: bool,
         frame: u32,
         steps_per_frame: u32,
+        clock: Clock,
     ) -> Checkpoint {
         Checkpoint {
             scene_hash,
             deterministic,
             frame,
             steps_per_frame,
+            clock,
             x: particles.x.iter().map(|p| p.as_vec3()).collect(),
             v: particles.v.iter().map(|p| p.as_vec3()).collect(),
             f: particles.f.iter().map(|m| m.as_mat3()).collect(),
@@ -160,6 +167,8 @@ impl Checkpoint {
         b.extend_from_slice(&flags.to_le_bytes());
         b.extend_from_slice(&self.frame.to_le_bytes());
         b.extend_from_slice(&self.steps_per_frame.to_le_bytes());
+        b.extend_from_slice(&self.clock.speed.to_le_bytes());
+        b.extend_from_slice(&self.clock.steps_done.to_le_bytes());
         b.extend_from_slice(&(n as u64).to_le_bytes());
         for p in 0..n {
             let mut put = |xs: &[f32]| {
@@ -272,12 +281,18 @@ impl Checkpoint {
         let flags = u32_at(o + 8);
         let frame = u32_at(o + 12);
         let steps_per_frame = u32_at(o + 16);
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap());
+        let clock = Clock {
+            speed: f64::from_bits(u64_at(o + 20)),
+            steps_done: u64_at(o + 28),
+        };
         let n = (body - HEADER_BYTES) / PARTICLE_BYTES;
         let mut cp = Checkpoint {
             scene_hash,
             deterministic: flags & FLAG_DETERMINISTIC != 0,
             frame,
             steps_per_frame,
+            clock,
             x: Vec::with_capacity(n),
             v: Vec::with_capacity(n),
             f: Vec::with_capacity(n),
@@ -441,6 +456,7 @@ pub fn scene_hash(scene: &Scene, splats: &Splats, setup: Option<&SimulationSetup
         h.section(format!("{:?}", s.materials).as_bytes());
         h.section(format!("{:?}", s.params).as_bytes());
         h.write(&s.steps_per_frame.to_le_bytes());
+        h.section(format!("{:?}", s.step_rule).as_bytes());
     }
     h.finish()
 }
@@ -473,6 +489,10 @@ mod tests {
             deterministic: true,
             frame: 20,
             steps_per_frame: 7,
+            clock: Clock {
+                speed: 12.345678901234,
+                steps_done: 140,
+            },
             x,
             v,
             f,
@@ -502,7 +522,7 @@ mod tests {
         };
         let p = back.to_particles(&like);
         assert_eq!(
-            Checkpoint::from_particles(&p, cp.scene_hash, true, 20, 7),
+            Checkpoint::from_particles(&p, cp.scene_hash, true, 20, 7, cp.clock),
             cp
         );
         assert_eq!(
@@ -542,10 +562,10 @@ mod tests {
         let e = err(b"PK\x03\x04 not a checkpoint at all");
         assert!(e.contains("not a splatter checkpoint"), "{e}");
         let mut other = bytes.clone();
-        other[8] = 2;
+        other[8] = 1;
         let e = err(&other);
         assert!(
-            e.contains("format 2") && e.contains("cannot continue"),
+            e.contains("format 1") && e.contains("cannot continue"),
             "{e}"
         );
         let mut other = bytes.clone();

@@ -76,14 +76,38 @@ fn manifest(dir: &Path) -> serde_json::Value {
 #[test]
 fn killed_run_resumes_to_the_frames_of_an_uninterrupted_run() {
     for particles in [r#"{ "spacing": 0.03 }"#, r#""gaussians""#] {
-        killed_run_resumes(particles);
+        killed_run_resumes(&sim_scene_with(9, 200.0, particles));
     }
 }
 
-fn killed_run_resumes(particles: &str) {
+/// With Δt following the motion closely (`cfl_velocity` 0.02: the falling cube's speed
+/// sets the step, and its stop on the ground changes it) the step count differs from
+/// frame to frame, and a killed run still resumes to the uninterrupted run's very bytes:
+/// the checkpoint holds the speed the next frame's Δt is chosen from.
+#[test]
+fn a_run_whose_step_count_varies_resumes_to_the_same_frames() {
+    let scene = sim_scene_with(9, 200.0, r#"{ "spacing": 0.03 }"#).replace(
+        r#""ground": {"kind": "sticky"}}"#,
+        r#""ground": {"kind": "sticky"}, "cfl_velocity": 0.02}"#,
+    );
+    assert!(scene.contains("cfl_velocity"), "test setup");
+    let dir = killed_run_resumes(&scene);
+    let m = manifest(&dir.path().join("full"));
+    let steps: Vec<u64> = (1..9)
+        .map(|f| m["frames"][f.to_string()]["steps"].as_u64().expect("steps"))
+        .collect();
+    let mut distinct = steps.clone();
+    distinct.sort_unstable();
+    distinct.dedup();
+    assert!(distinct.len() >= 3, "steps per frame {steps:?}");
+}
+
+/// Kill a deterministic run of `scene` before frame 5, resume it and compare; the
+/// directory holds `full` (uninterrupted) and `part` (killed and resumed).
+fn killed_run_resumes(scene: &str) -> TempDir {
     let dir = TempDir::new().unwrap();
     let d = dir.path();
-    write(d, "sim.json", &sim_scene_with(9, 200.0, particles));
+    write(d, "sim.json", scene);
     let common = [
         "render",
         "sim.json",
@@ -141,6 +165,7 @@ fn killed_run_resumes(particles: &str) {
         describe(&again)
     );
     assert_same_frames(&d.join("full"), &d.join("part"), 9);
+    dir
 }
 
 /// Without --deterministic the GPU sums P2G with float atomics where it can, whose order

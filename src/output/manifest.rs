@@ -104,6 +104,10 @@ pub struct ChunkSettings {
 pub struct FrameTiming {
     /// The simulation steps leading to this frame, with the watchdog readback.
     pub simulate_ms: f64,
+    /// How many steps led to this frame (its Δt is the frame's length over them; it
+    /// follows the motion unless the scene sets `dt`); absent without a simulation.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub steps: Option<u32>,
     /// Loading the frame's state (`--from-states`).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub load_ms: Option<f64>,

@@ -118,6 +118,7 @@ impl StateFrames<'_> {
                 .render_timed(gpu, &self.job.path.camera(frame), background)?;
         let timing = FrameTiming {
             simulate_ms: 0.0,
+            steps: None,
             load_ms: Some(load_ms),
             render_ms: t1.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,

@@ -22,6 +22,7 @@ use crate::sim::frame::FrameError;
 use crate::sim::gpu::{GpuSim, P2gPath, P2gRace, Watchdog};
 use crate::sim::models::PlasticModel;
 use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
+use crate::sim::time_step::{Clock, FrameSteps};
 use crate::splat::sh::ShRotator;
 
 pub(super) fn execute(
@@ -331,7 +332,7 @@ fn describe_race(race: &P2gRace) -> String {
 
 fn describe_simulation(s: &SimulationSetup, p2g: P2gPath, deterministic: bool) -> String {
     format!(
-        "simulation: {} particles moving {} Gaussians, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame, P2G {}{}",
+        "simulation: {} particles moving {} Gaussians, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame{}, P2G {}{}",
         s.particles.len(),
         s.binding.len(),
         s.materials.len(),
@@ -341,6 +342,10 @@ fn describe_simulation(s: &SimulationSetup, p2g: P2gPath, deterministic: bool) -
         s.grid.dx,
         s.params.dt,
         s.steps_per_frame,
+        match s.step_rule.cfl_velocity {
+            Some(c) => format!(" at first (each frame's Δt follows the motion: cfl_velocity {c})"),
+            None => String::new(),
+        },
         p2g.name(),
         if deterministic { " (deterministic)" } else { "" }
     )
@@ -354,6 +359,8 @@ struct Simulation<'a> {
     derive: Derive,
     /// Kinematic objects' Gaussians, moved rigidly along their paths every frame.
     rigid: Vec<(&'a KinematicObject, RigidDerive)>,
+    /// The steps so far and the last frame's largest speed (the next Δt follows it).
+    clock: Clock,
 }
 
 impl<'a> Simulation<'a> {
@@ -391,32 +398,51 @@ impl<'a> Simulation<'a> {
                 rigid.push((k, r));
             }
         }
+        let clock = resume_from.map_or(
+            Clock {
+                speed: s.particles.v.iter().map(|v| v.length()).fold(0.0, f64::max),
+                steps_done: 0,
+            },
+            |cp| cp.clock,
+        );
         Ok(Simulation {
             setup: s,
             sim,
             derive,
             rigid,
+            clock,
         })
     }
 
     /// The steps that lead to `frame` (none for the first simulated frame), then the pool
-    /// fitted for the next frame; a watchdog count stops the run.
+    /// fitted for the next frame; a watchdog count stops the run. Returns the steps taken.
     fn advance_to(
         &mut self,
         gpu: &GpuContext,
         scene: &Scene,
         frame: u32,
         first: u32,
-    ) -> Result<()> {
+    ) -> Result<u32> {
         let s = self.setup;
+        let before = self.clock;
+        let plan = match s.step_rule.frame_steps(before.speed) {
+            Ok(plan) => plan,
+            Err(e) => bail!("frame {frame}: {e}; try a smaller simulation.cfl, or a scene whose speeds the grid can follow"),
+        };
         let w = if frame > first {
+            self.sim.set_dt(gpu, plan.dt)?;
             // The moving colliders' clock: this frame's steps start at frame − 1.
-            let start = f64::from(frame - 1) * f64::from(s.steps_per_frame) * s.params.dt;
-            match self.sim.step_frame(gpu, s.steps_per_frame, start) {
+            let start = f64::from(frame - 1) * s.step_rule.frame;
+            let w = match self.sim.step_frame(gpu, plan.steps, start) {
                 Ok(steps) => steps.watchdog,
                 Err(FrameError::Gpu(e)) => return Err(e.into()),
                 Err(e) => bail!("frame {frame}: {e}"),
-            }
+            };
+            self.clock = Clock {
+                speed: f64::from(w.speed_max),
+                steps_done: before.steps_done + u64::from(plan.steps),
+            };
+            w
         } else {
             self.sim.take_watchdog(gpu)?
         };
@@ -427,9 +453,12 @@ impl<'a> Simulation<'a> {
                 Some(p) => Some(self.describe_particle(gpu, scene, p)?),
                 None => None,
             };
-            bail!("{}", watchdog_message(frame, w, s, culprit));
+            bail!(
+                "{}",
+                watchdog_message(frame, w, s, plan, before.steps_done, culprit)
+            );
         }
-        Ok(())
+        Ok(if frame > first { plan.steps } else { 0 })
     }
 
     /// Particle `p` as a failure names it: its object, material, where it is and how fast
@@ -514,7 +543,7 @@ impl Frames<'_> {
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
             if let Some(sim) = sim.as_deref_mut() {
-                sim.advance_to(self.gpu, &self.job.scene, frame, first_sim)?;
+                timing.steps = Some(sim.advance_to(self.gpu, &self.job.scene, frame, first_sim)?);
                 if self.job.opts.checkpoint_every > 0
                     && frame > first_sim
                     && frame % self.job.opts.checkpoint_every == 0
@@ -571,6 +600,7 @@ impl Frames<'_> {
             self.job.opts.deterministic,
             frame,
             s.steps_per_frame,
+            sim.clock,
         )
         .save(&self.checkpoint_file)?;
         self.sink.manifest.write_now()?;
@@ -611,21 +641,24 @@ fn watchdog_message(
     frame: u32,
     w: Watchdog,
     s: &SimulationSetup,
+    plan: FrameSteps,
+    steps_before: u64,
     culprit: Option<(String, f64)>,
 ) -> String {
+    let dt = plan.dt;
     let first = culprit
         .as_ref()
         .map_or(String::new(), |(c, _)| format!("; the first: {c}"));
     // A particle that crossed more than a cell a step did not leave because the domain is
     // small: the step blew up (the CFL condition keeps a particle well under a cell).
-    let cells_a_step = culprit.map_or(0.0, |(_, speed)| speed * s.params.dt / s.grid.dx);
-    let n = s.steps_per_frame;
+    let cells_a_step = culprit.map_or(0.0, |(_, speed)| speed * dt / s.grid.dx);
+    let n = plan.steps;
     let steps = match w.first_step {
-        // Frame f shows the state after f·n steps: the batch read before it ran steps
-        // (f − 1)·n + 1 ..= f·n, counted from 1.
+        // The frame's steps follow the `steps_before` of the frames before it; counted
+        // from 1.
         Some(k) => format!(
             "in the {n} steps before frame {frame}, first at step {} (substep {} of {n})",
-            u64::from(frame.saturating_sub(1)) * u64::from(n) + u64::from(k) + 1,
+            steps_before + u64::from(k) + 1,
             k + 1
         ),
         None => format!("in the {n} steps before frame {frame}"),
@@ -633,22 +666,22 @@ fn watchdog_message(
     if w.nonfinite > 0 {
         format!(
             "simulation stopped: {} particle-steps became NaN/Inf {steps} (Δt {:.3e} s, Δx {}){first}; likely cause: Δt too large for the material's stiffness (lower simulation.dt or simulation.cfl) or a material that inverts (use NACC or fixed_corotated)",
-            w.nonfinite, s.params.dt, s.grid.dx
+            w.nonfinite, dt, s.grid.dx
         )
     } else if w.fixed_point_range > 0 {
         format!(
             "simulation stopped: {} particle-steps moved faster than the fixed-point P2G's bound of {} cells a step ({:.4e} m/s at Δt {:.3e} s, Δx {}) {steps}; their contributions were not summed; likely cause: Δt far too large for the motion (lower simulation.dt or simulation.cfl)",
             w.fixed_point_range,
             FIXED_POINT_CELLS_PER_STEP,
-            FIXED_POINT_CELLS_PER_STEP * s.grid.dx / s.params.dt,
-            s.params.dt,
+            FIXED_POINT_CELLS_PER_STEP * s.grid.dx / dt,
+            dt,
             s.grid.dx
         )
     } else {
         let (lo, hi) = (s.grid.lo, s.grid.hi());
         let v = |x: DVec3| format!("[{:.3}, {:.3}, {:.3}]", x.x, x.y, x.z);
         let cause = if cells_a_step > 1.0 {
-            format!("an instability, not the domain's size: it crossed {cells_a_step:.3e} cells a step (Δt {:.3e} s, Δx {}) where the CFL condition keeps a particle under one; try a smaller simulation.cfl or simulation.dt", s.params.dt, s.grid.dx)
+            format!("an instability, not the domain's size: it crossed {cells_a_step:.3e} cells a step (Δt {:.3e} s, Δx {}) where the CFL condition keeps a particle under one; try a smaller simulation.cfl or simulation.dt", dt, s.grid.dx)
         } else {
             "simulation.domain too small for the motion, or Δt too large".to_string()
         };

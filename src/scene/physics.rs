@@ -17,6 +17,9 @@ fn default_gravity() -> [f64; 3] {
 fn default_cfl() -> f64 {
     0.4
 }
+fn default_cfl_velocity() -> f64 {
+    0.15
+}
 
 /// The `simulation` block.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
@@ -31,6 +34,11 @@ pub struct SimulationSpec {
     /// CFL number for the default Δt (and the check of a given one). Default 0.4.
     #[serde(default = "default_cfl")]
     pub cfl: f64,
+    /// Without `dt`: the fraction of a cell the fastest particle may cross in a step, so
+    /// that Δt ≤ cfl_velocity · Δx / v_max too, re-chosen every frame from the speeds of
+    /// the frame before (docs/method.md §2.3). Default 0.15.
+    #[serde(default = "default_cfl_velocity")]
+    pub cfl_velocity: f64,
     /// The simulated box: only what moves is gridded.
     pub domain: DomainSpec,
     /// Default [0, 0, −9.8] (z up).

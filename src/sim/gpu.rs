@@ -127,6 +127,9 @@ pub struct GpuSim {
     /// Two-field separation (its buffers are sized to the pool).
     separation: bool,
     dt: f64,
+    /// The particles' total and largest mass (as f32 on the GPU): the fixed-point units'
+    /// inputs, again whenever Δt changes.
+    masses: (f64, f64),
     /// Start time of the next substep, in seconds (the moving colliders' clock).
     time: std::cell::Cell<f64>,
     /// A copy of the particle state ([`GpuSim::save_state`]), made only while the grid pool
@@ -262,7 +265,8 @@ impl GpuSim {
         // From the masses as the GPU holds them (f32), so that particles the GPU cannot
         // tell apart get the same units.
         let mass = || particles.mass.iter().map(|m| f64::from(*m as f32));
-        step.set_fixed_point(mass().sum(), mass().fold(0.0, f64::max));
+        let masses = (mass().sum(), mass().fold(0.0, f64::max));
+        step.set_fixed_point(masses.0, masses.1);
         let device = &gpu.device;
         let scatter = match path {
             P2gPath::Gather => None,
@@ -386,6 +390,7 @@ impl GpuSim {
             kinematic: Vec::new(),
             separation,
             dt: params.dt,
+            masses,
             time: std::cell::Cell::new(0.0),
             saved: None,
         })
@@ -413,6 +418,26 @@ impl GpuSim {
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
         gpu.check()?;
         Ok(())
+    }
+
+    /// Step by `dt` from now on (a frame's Δt, `sim::time_step`): the step's constants, the
+    /// fixed-point P2G's units (its speed bound is cells a step) and the moving colliders'
+    /// substep clock.
+    pub fn set_dt(&mut self, gpu: &GpuContext, dt: f64) -> Result<(), GpuError> {
+        if dt == self.dt {
+            return Ok(());
+        }
+        self.dt = dt;
+        self.consts.dt = dt as f32;
+        self.consts.set_fixed_point(self.masses.0, self.masses.1);
+        gpu.queue
+            .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
+        gpu.check()
+    }
+
+    /// Δt of the next steps.
+    pub fn dt(&self) -> f64 {
+        self.dt
     }
 
     /// Set the start time (seconds) of the next step: the moving colliders' clock, which

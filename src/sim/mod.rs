@@ -41,6 +41,7 @@ pub mod particles;
 pub mod separation;
 pub mod step;
 pub mod svd;
+pub mod time_step;
 pub mod wgsl;
 
 pub use boundary::{Boundaries, BoundaryKind, Condition, DomainWalls, PlaneCollider, WALL_BAND};

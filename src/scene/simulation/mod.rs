@@ -21,6 +21,7 @@ use super::regions::{ObjectRegions, ParticleKey};
 use super::{BuildReport, Scene, SceneError};
 use crate::derive::Binding;
 use crate::render::Splats;
+use crate::sim::time_step::{FrameSteps, StepRule};
 use crate::sim::{
     cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams,
 };
@@ -44,8 +45,12 @@ pub struct SimulationSetup {
     pub grid: Grid,
     pub materials: Vec<Material>,
     pub params: StepParams,
-    /// Steps per output frame: ⌈(1/fps) / Δt⌉ (Δt shrunk to divide the frame exactly).
+    /// Steps of the first frame: ⌈(1/fps) / Δt⌉ (Δt shrunk to divide the frame exactly);
+    /// `params.dt` is that frame's Δt. Later frames may take others ([`Self::step_rule`]).
     pub steps_per_frame: u32,
+    /// How each frame's Δt is chosen: the CFL bound (or the scene's `dt`) and, without a
+    /// `dt`, the bound on the fastest particle's cells a step.
+    pub step_rule: StepRule,
     /// Objects on a prescribed path: moving colliders, rendered moving rigidly (their
     /// Gaussians are in the static runs of `parts`).
     pub kinematic: Vec<super::kinematic::KinematicObject>,
@@ -156,7 +161,14 @@ pub fn prepare(
         let picked = moving[i].as_deref().expect("simulated");
         body.add(scene, i, gather(&splats, picked), &grid, spec, &mut out)?;
     }
-    let (dt, steps_per_frame) = time_step(scene, spec, body.dt_cfl, &mut body.warnings)?;
+    let speed = body
+        .particles
+        .v
+        .iter()
+        .map(|v| v.length())
+        .fold(0.0, f64::max);
+    let (step_rule, first) = time_step(scene, spec, body.dt_cfl, speed, &mut body.warnings)?;
+    let (dt, steps_per_frame) = (first.dt, first.steps);
     let params = StepParams {
         dt,
         gravity: vec3(spec.gravity),
@@ -175,6 +187,7 @@ pub fn prepare(
         materials: body.materials,
         params,
         steps_per_frame,
+        step_rule,
         kinematic,
         warnings: body.warnings,
     }))
@@ -537,14 +550,15 @@ impl ParticleCloud {
     }
 }
 
-/// Δt (given, or the CFL bound) shrunk to divide the frame exactly, and the steps per
-/// frame.
+/// How each frame's Δt is chosen (given, or the CFL bound and the particles' speed), and
+/// the first frame's steps, for particles that start at most at `speed`.
 fn time_step(
     scene: &Scene,
     spec: &SimulationSpec,
     dt_cfl: f64,
+    speed: f64,
     warnings: &mut Vec<String>,
-) -> Result<(f64, u32), SceneError> {
+) -> Result<(StepRule, FrameSteps), SceneError> {
     let o = scene.origin.as_str();
     let frame = 1.0 / f64::from(scene.output.fps);
     let dt = match spec.dt {
@@ -567,8 +581,7 @@ fn time_step(
         }
         None => dt_cfl,
     };
-    let steps_per_frame = (frame / dt).ceil().max(1.0);
-    if steps_per_frame > 1e7 {
+    if (frame / dt).ceil() > 1e7 {
         return Err(SceneError::invalid(
             o,
             "simulation.dt",
@@ -576,7 +589,35 @@ fn time_step(
             "a step giving at most 10⁷ steps per frame",
         ));
     }
-    Ok((frame / steps_per_frame, steps_per_frame as u32))
+    let c = spec.cfl_velocity;
+    if !(c.is_finite() && c > 0.0 && c <= 1.0) {
+        return Err(SceneError::invalid(
+            o,
+            "simulation.cfl_velocity",
+            c,
+            "a fraction of a cell in (0, 1]",
+        ));
+    }
+    let rule = StepRule {
+        frame,
+        dt_max: dt,
+        cfl_velocity: spec.dt.is_none().then_some(c),
+        dx: spec.dx,
+        gravity: vec3(spec.gravity).length(),
+    };
+    let first = rule.frame_steps(speed).map_err(|e| {
+        SceneError::invalid(
+            o,
+            "objects[].physics.velocity",
+            format!("{:.4e} m/s", e.speed),
+            format!(
+                "a start speed that a step of at least 1/{} of the CFL bound follows (at most about {:.4e} m/s)",
+                crate::sim::time_step::MAX_SHRINK,
+                c * spec.dx * crate::sim::time_step::MAX_SHRINK / dt
+            ),
+        )
+    })?;
+    Ok((rule, first))
 }
 
 /// Each particle's region (None: the object's own material). Depth below the surface: for
