@@ -184,6 +184,25 @@ fn return_mapping(name: &str) -> Result<ReturnMapping, String> {
     })
 }
 
+/// `--p2g`: a P2G path by name.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum P2gArg {
+    Gather,
+    Atomic,
+    Fixed,
+}
+
+impl P2gArg {
+    fn path(self) -> splatter::sim::gpu::P2gPath {
+        use splatter::sim::gpu::P2gPath;
+        match self {
+            P2gArg::Gather => P2gPath::Gather,
+            P2gArg::Atomic => P2gPath::Atomic,
+            P2gArg::Fixed => P2gPath::Fixed,
+        }
+    }
+}
+
 #[derive(Clone, Copy, clap::ValueEnum)]
 pub(crate) enum AccuracyPart {
     All,
@@ -300,6 +319,12 @@ pub(crate) struct RenderArgs {
     /// long run without it may take the gather too, where it measures faster: the log says.)
     #[arg(long)]
     pub(crate) deterministic: bool,
+    /// Run the simulation's P2G on this path instead of the one chosen for the adapter
+    /// (to reproduce a failure on every path, or to compare them): `gather` (sorted, in a
+    /// fixed order; every adapter), `atomic` (float atomics; needs them, not with
+    /// --deterministic), `fixed` (fixed-point integer atomics, deterministic)
+    #[arg(long, value_name = "PATH")]
+    pub(crate) p2g: Option<P2gArg>,
     /// Save the simulation state to OUT_DIR/checkpoint.bin every N frames (0: never).
     #[arg(long, value_name = "N", default_value_t = 10)]
     pub(crate) checkpoint_every: u32,
@@ -354,6 +379,7 @@ impl RenderArgs {
             export_particles: self.export_particles,
             resume: self.resume,
             deterministic: self.deterministic,
+            p2g: self.p2g.map(P2gArg::path),
             checkpoint_every: self.checkpoint_every,
             video: self.video,
             fragments: self.fragments,

@@ -896,6 +896,42 @@ fn missing_backend_says_what_to_install() {
     }
 }
 
+/// `--p2g PATH` runs the simulation's P2G on the path named (the log says which), each
+/// path gives a run; float atomics with --deterministic, and an unknown path, are refused.
+#[test]
+fn p2g_path_can_be_forced() {
+    let dir = workdir();
+    write(dir.path(), "sim.json", &sim_scene(2, "", 200.0));
+    for path in ["gather", "atomic", "fixed"] {
+        let out = splatter(
+            dir.path(),
+            &["render", "sim.json", "--out", path, "--p2g", path],
+        );
+        expect_success(&out);
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(err.contains(&format!("P2G {path}")), "{path}: {err}");
+    }
+    let line = expect_error(&splatter(
+        dir.path(),
+        &[
+            "render",
+            "sim.json",
+            "--out",
+            "x",
+            "--p2g",
+            "atomic",
+            "--deterministic",
+        ],
+    ));
+    assert_mentions(&line, &["--p2g atomic", "--deterministic"]);
+    let out = splatter(
+        dir.path(),
+        &["render", "sim.json", "--out", "y", "--p2g", "scatter"],
+    );
+    assert!(!out.status.success());
+    assert_no_panic(&out);
+}
+
 /// A small simulated scene: a fixed-corotated cube falling in a box, `frames` frames at
 /// 64×48; `dt` and `e` let a test provoke the watchdog.
 fn sim_scene(frames: u32, dt: &str, e: f64) -> String {

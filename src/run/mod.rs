@@ -85,6 +85,8 @@ pub struct RunOptions {
     pub resume: bool,
     /// Sum P2G in a fixed order: bit-identical frames on the same adapter.
     pub deterministic: bool,
+    /// Run P2G on this path instead of the one chosen for the adapter and scene.
+    pub p2g: Option<crate::sim::gpu::P2gPath>,
     /// Save the simulation state every N frames (0: never).
     pub checkpoint_every: u32,
     /// Assemble the frames into this video with ffmpeg.
@@ -124,6 +126,7 @@ impl Default for RunOptions {
             export_particles: None,
             resume: false,
             deterministic: false,
+            p2g: None,
             checkpoint_every: 10,
             video: None,
             fragments: false,

@@ -34,6 +34,9 @@ pub(super) fn execute(
 ) -> Result<Summary> {
     let opts = &job.opts;
     let scene = &job.scene;
+    if opts.p2g == Some(P2gPath::Atomic) && opts.deterministic {
+        bail!("--p2g atomic sums with float atomics, whose order varies: it cannot be --deterministic (use --p2g fixed or gather)");
+    }
     let simulated = scene.objects.iter().any(|o| o.physics.is_some());
     if simulated {
         check_grid_fits(gpu, scene)?;
@@ -65,6 +68,7 @@ pub(super) fn execute(
     let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
     let p2g = match &setup {
+        Some(_) if opts.p2g.is_some() => opts.p2g.expect("matched"),
         Some(s) if opts.deterministic => {
             P2gPath::deterministic_for(gpu, &s.params, s.particles.len(), gather_fits(gpu, s))
         }
