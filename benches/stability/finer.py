@@ -40,9 +40,11 @@ def run_scene(splatter, scene, out, frames, quality, timeout):
     row = {"scene": name, "exit": code, "wall_s": round(wall, 1)}
     m = re.search(r"simulation: (\d+) particles", text)
     row["particles"] = int(m.group(1)) if m else 0
-    manifest = os.path.join(dest, "manifest.json")
+    # A run of some of the scene's frames names its manifest after them.
+    manifests = sorted(glob.glob(os.path.join(dest, "manifest*.json")))
     reached = -1
-    if os.path.exists(manifest):
+    if manifests:
+        manifest = manifests[0]
         mf = json.load(open(manifest))
         done = sorted(int(f) for f in mf.get("frames", {}))
         reached = done[-1] if done else -1
