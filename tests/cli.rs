@@ -1149,6 +1149,13 @@ fn bad_simulation_input_is_named() {
     write(dir.path(), "b.json", &sim_scene(1, "", -5.0));
     let line = expect_error(&splatter(dir.path(), &["render", "b.json", "--out", "f"]));
     assert_mentions(&line, &["objects[0].physics.material.E", "-5"]);
+    write(
+        dir.path(),
+        "c.json",
+        &sim_scene(1, r#""cfl_velocity": 0,"#, 200.0),
+    );
+    let line = expect_error(&splatter(dir.path(), &["render", "c.json", "--out", "f"]));
+    assert_mentions(&line, &["simulation.cfl_velocity", "0", "(0, 1]"]);
 }
 
 /// `--export-ply DIR`, `--export-spz DIR` and `--export-glb DIR` write one standard 3DGS

@@ -9,10 +9,17 @@ whole list takes about an hour.
 
 Usage:
   python3 benches/stability/finer.py SPLATTER OUT_DIR [--frames N] [--quality Q]
-      [--timeout S] [SCENE ...]
+      [--scale S] [--p2g PATH] [--timeout S] [SCENE ...]
       renders into OUT_DIR/NAME/ and writes OUT_DIR/finer.json; prints the table as
       markdown. Defaults: 2 frames (frame 0 and one simulated frame), quality high,
-      900 s per scene, every scene in scenes/.
+      900 s per scene, every scene in scenes/. --scale S instead multiplies the scene's
+      dx and every spacing by S (as `bench suite --scale S`; quality standard); --p2g
+      forces a P2G path (gather, atomic, fixed).
+
+The one-call check for a lent GPU (the suite's failures at the paper's resolution):
+  python3 benches/stability/finer.py target/release/splatter /tmp/gpu --scale 0.3 \
+      --frames 4 scenes/pumpkin.json scenes/dragonfruit.json
+  and the same with --p2g atomic, then --p2g gather.
 Standard library only.
 """
 import glob
@@ -24,11 +31,30 @@ import sys
 import time
 
 
-def run_scene(splatter, scene, out, frames, quality, timeout):
+def scaled(value, scale):
+    """The scene with its dx and every spacing times `scale`."""
+    if isinstance(value, dict):
+        return {k: (v * scale if k in ("dx", "spacing") and isinstance(v, (int, float))
+                    else scaled(v, scale)) for k, v in value.items()}
+    if isinstance(value, list):
+        return [scaled(v, scale) for v in value]
+    return value
+
+
+def run_scene(splatter, scene, out, frames, quality, timeout, scale=None, p2g=None):
     name = os.path.splitext(os.path.basename(scene))[0]
     dest = os.path.join(out, name)
+    if scale is not None:
+        text = scaled(json.load(open(scene)), scale)
+        # Written beside the output (no shipped scene loads files by a relative path).
+        os.makedirs(out, exist_ok=True)
+        scene = os.path.join(out, f"{name}_x{scale:g}.json")
+        json.dump(text, open(scene, "w"))
+        quality = "standard"
     cmd = [splatter, "render", scene, "--out", dest, "--frames", f"0..{frames}",
            "--quality", quality, "--width", "160", "--height", "120"]
+    if p2g:
+        cmd += ["--p2g", p2g]
     t = time.time()
     try:
         p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
@@ -67,7 +93,7 @@ def main():
         print(__doc__)
         sys.exit(2)
     splatter, out = args[0], args[1]
-    frames, quality, timeout, scenes = 2, "high", 900, []
+    frames, quality, timeout, scenes, scale, p2g = 2, "high", 900, [], None, None
     rest = args[2:]
     while rest:
         a = rest.pop(0)
@@ -75,6 +101,10 @@ def main():
             frames = int(rest.pop(0))
         elif a == "--quality":
             quality = rest.pop(0)
+        elif a == "--scale":
+            scale = float(rest.pop(0))
+        elif a == "--p2g":
+            p2g = rest.pop(0)
         elif a == "--timeout":
             timeout = float(rest.pop(0))
         else:
@@ -84,7 +114,7 @@ def main():
     os.makedirs(out, exist_ok=True)
     rows = []
     for s in scenes:
-        row = run_scene(splatter, s, out, frames, quality, timeout)
+        row = run_scene(splatter, s, out, frames, quality, timeout, scale, p2g)
         rows.append(row)
         print(json.dumps(row), file=sys.stderr, flush=True)
         json.dump(rows, open(os.path.join(out, "finer.json"), "w"), indent=1)

@@ -17,9 +17,8 @@ fn default_gravity() -> [f64; 3] {
 fn default_cfl() -> f64 {
     0.4
 }
-fn default_cfl_velocity() -> f64 {
-    0.15
-}
+/// `simulation.cfl_velocity` when the scene does not set it (docs/method.md §2.3).
+pub const DEFAULT_CFL_VELOCITY: f64 = 0.15;
 
 /// The `simulation` block.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
@@ -36,9 +35,10 @@ pub struct SimulationSpec {
     pub cfl: f64,
     /// Without `dt`: the fraction of a cell the fastest particle may cross in a step, so
     /// that Δt ≤ cfl_velocity · Δx / v_max too, re-chosen every frame from the speeds of
-    /// the frame before (docs/method.md §2.3). Default 0.15.
-    #[serde(default = "default_cfl_velocity")]
-    pub cfl_velocity: f64,
+    /// the frame before (docs/method.md §2.3). Default 0.15. With `dt` the step is fixed
+    /// and this is ignored (with a warning).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cfl_velocity: Option<f64>,
     /// The simulated box: only what moves is gridded.
     pub domain: DomainSpec,
     /// Default [0, 0, −9.8] (z up).

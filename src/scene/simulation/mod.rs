@@ -589,7 +589,15 @@ fn time_step(
             "a step giving at most 10⁷ steps per frame",
         ));
     }
-    let c = spec.cfl_velocity;
+    let c = spec
+        .cfl_velocity
+        .unwrap_or(crate::scene::physics::DEFAULT_CFL_VELOCITY);
+    if spec.dt.is_some() && spec.cfl_velocity.is_some() {
+        warnings.push(
+            "simulation.cfl_velocity is ignored: simulation.dt fixes the step for the whole run"
+                .to_string(),
+        );
+    }
     if !(c.is_finite() && c > 0.0 && c <= 1.0) {
         return Err(SceneError::invalid(
             o,
