@@ -66,6 +66,8 @@ def run_scene(splatter, scene, out, frames, quality, timeout, scale=None, p2g=No
     row = {"scene": name, "exit": code, "wall_s": round(wall, 1)}
     m = re.search(r"simulation: (\d+) particles", text)
     row["particles"] = int(m.group(1)) if m else 0
+    m = re.search(r"(\d+) steps per frame", text)
+    row["first_steps"] = int(m.group(1)) if m else 0
     # A run of some of the scene's frames names its manifest after them.
     manifests = sorted(glob.glob(os.path.join(dest, "manifest*.json")))
     reached = -1
@@ -125,7 +127,7 @@ def main():
                "timeout" if r["exit"] == "timeout" else r["error"][:60] if r["error"] else "")
         if r["blew_up"]:
             why += " (blow-up)"
-        steps = ", ".join(str(s) for s in r.get("steps", []))
+        steps = ", ".join(str(s) for s in r.get("steps", [])) or str(r.get("first_steps") or "")
         print(f"| {r['scene']} | {r['particles']} | {r['frames_reached']} | {why or 'no'} | "
               f"{steps} | {r.get('s_per_frame')} |")
 
