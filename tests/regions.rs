@@ -162,7 +162,7 @@ fn bad_regions_are_named() {
     let cases = [
         (
             r#"{ "material": M }"#,
-            "objects[0].physics.regions[0] = no selector: expected exactly one of `shell`, `box`, `sphere` or `label`",
+            "objects[0].physics.regions[0] = no selector: expected exactly one of `shell`, `box`, `sphere`, `label` or `voronoi`",
         ),
         (
             r#"{ "shell": { "to": 0.1 }, "sphere": { "center": [0.5, 0.5, 0.5], "radius": 0.1 }, "material": M }"#,
@@ -179,6 +179,14 @@ fn bad_regions_are_named() {
         (
             r#"{ "sphere": { "center": [0.5, 0.5, 0.5], "radius": 0 }, "material": M }"#,
             "objects[0].physics.regions[0].sphere.radius = 0: expected a radius > 0",
+        ),
+        (
+            r#"{ "voronoi": { "cells": 1, "width": 0.01 }, "material": M }"#,
+            "objects[0].physics.regions[0].voronoi.cells = 1: expected a number of cells from 2 to 256",
+        ),
+        (
+            r#"{ "voronoi": { "cells": 5, "width": 0 }, "material": M }"#,
+            "objects[0].physics.regions[0].voronoi.width = 0: expected a face half-thickness > 0",
         ),
         (
             r#"{ "label": "flesh", "material": M }"#,
