@@ -193,7 +193,7 @@ pub(crate) enum P2gArg {
 }
 
 impl P2gArg {
-    fn path(self) -> splatter::sim::gpu::P2gPath {
+    pub(crate) fn path(self) -> splatter::sim::gpu::P2gPath {
         use splatter::sim::gpu::P2gPath;
         match self {
             P2gArg::Gather => P2gPath::Gather,
@@ -234,6 +234,10 @@ pub(crate) struct SuiteArgs {
     /// Directory of the example scenes.
     #[arg(long, default_value = "scenes")]
     pub(crate) scenes: PathBuf,
+    /// Run the end-to-end examples' P2G on this path (as `render --p2g`), e.g. to
+    /// reproduce a failure on every path.
+    #[arg(long, value_name = "PATH")]
+    pub(crate) p2g: Option<P2gArg>,
 }
 
 #[derive(clap::Args)]

@@ -197,6 +197,7 @@ fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
         sim_steps: 20,
         repeat: if args.quick { 3 } else { 5 },
         scenes: args.scenes.clone(),
+        p2g: args.p2g.map(|p| p.path().name().to_string()),
     };
     let out = args.out.join("data");
     splatter::study::suite::run_suite(&gpu, &opts, &out, &mut std::io::stderr())?;

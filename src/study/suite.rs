@@ -88,6 +88,9 @@ pub struct SuiteOptions {
     pub repeat: usize,
     /// Directory holding the example scenes.
     pub scenes: PathBuf,
+    /// The end-to-end runs' P2G path by name (`P2gPath::name`); None: as `render` chooses.
+    #[serde(default)]
+    pub p2g: Option<String>,
 }
 
 /// One example's end-to-end result.
@@ -121,6 +124,9 @@ pub struct EndToEndRun {
     pub s_per_frame: f64,
     /// Whole child process, setup and PNG writing included, over all frames.
     pub wall_s: f64,
+    /// The P2G path the run took (its manifest's).
+    #[serde(default)]
+    pub p2g: Option<String>,
 }
 
 /// Everything `bench suite` measured.
@@ -313,6 +319,10 @@ fn run_render(gpu: &GpuContext, scene: &Path, opts: &SuiteOptions) -> Result<End
         width: Some(opts.width),
         height: Some(opts.height),
         checkpoint_every: 0,
+        p2g: opts
+            .p2g
+            .as_deref()
+            .and_then(crate::sim::gpu::P2gPath::from_name),
         ..RunOptions::default()
     };
     let start = Instant::now();
@@ -339,6 +349,7 @@ fn read_manifest(dir: &Path, wall_s: f64) -> Result<EndToEndRun> {
     let sim = timed.iter().map(|(_, t)| t.simulate_ms).sum::<f64>() / n / 1e3;
     let render = timed.iter().map(|(_, t)| t.render_ms).sum::<f64>() / n / 1e3;
     Ok(EndToEndRun {
+        p2g: m.settings.p2g.clone(),
         particles: m.settings.particles.unwrap_or(0),
         gaussians: m.settings.gaussians,
         steps_per_frame: m.settings.steps_per_frame.unwrap_or(0),
@@ -515,6 +526,7 @@ mod tests {
                         render_s_per_frame: 0.0456,
                         s_per_frame: 0.169,
                         wall_s: 2.0,
+                        p2g: Some("gather".into()),
                     }),
                 },
                 EndToEnd {

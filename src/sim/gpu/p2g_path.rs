@@ -20,6 +20,14 @@ pub enum P2gPath {
 }
 
 impl P2gPath {
+    /// Every path, in the order of their names.
+    pub const ALL: [P2gPath; 3] = [P2gPath::Gather, P2gPath::Atomic, P2gPath::Fixed];
+
+    /// The path of a name ([`P2gPath::name`]).
+    pub fn from_name(name: &str) -> Option<P2gPath> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
     /// As the manifest and the command line name it.
     pub fn name(self) -> &'static str {
         match self {
@@ -68,5 +76,19 @@ impl P2gPath {
         } else {
             Self::best(gpu)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::P2gPath;
+
+    /// Every path is found by its name, and nothing else is.
+    #[test]
+    fn names_round_trip() {
+        for p in P2gPath::ALL {
+            assert_eq!(P2gPath::from_name(p.name()), Some(p));
+        }
+        assert_eq!(P2gPath::from_name("scatter"), None);
     }
 }
