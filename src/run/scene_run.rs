@@ -22,7 +22,7 @@ use crate::sim::frame::FrameError;
 use crate::sim::gpu::{GpuSim, P2gPath, P2gRace, Watchdog};
 use crate::sim::models::PlasticModel;
 use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
-use crate::sim::time_step::{Clock, FrameSteps};
+use crate::sim::time_step::{Clock, StepPlan};
 use crate::splat::sh::ShRotator;
 
 pub(super) fn execute(
@@ -404,7 +404,7 @@ impl<'a> Simulation<'a> {
         }
         let clock = resume_from.map_or(
             Clock {
-                speed: s.particles.v.iter().map(|v| v.length()).fold(0.0, f64::max),
+                speed: s.particles.max_speed(),
                 steps_done: 0,
             },
             |cp| cp.clock,
@@ -645,7 +645,7 @@ fn watchdog_message(
     frame: u32,
     w: Watchdog,
     s: &SimulationSetup,
-    plan: FrameSteps,
+    plan: StepPlan,
     steps_before: u64,
     culprit: Option<(String, f64)>,
 ) -> String {

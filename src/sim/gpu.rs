@@ -435,11 +435,6 @@ impl GpuSim {
         gpu.check()
     }
 
-    /// Δt of the next steps.
-    pub fn dt(&self) -> f64 {
-        self.dt
-    }
-
     /// Set the start time (seconds) of the next step: the moving colliders' clock, which
     /// [`step`](Self::step) advances by Δt per substep.
     pub fn set_time(&self, seconds: f64) {

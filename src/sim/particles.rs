@@ -36,6 +36,11 @@ impl Particles {
         self.x.len()
     }
 
+    /// The largest particle speed |v_p| (0 without particles).
+    pub fn max_speed(&self) -> f64 {
+        self.v.iter().map(|v| v.length()).fold(0.0, f64::max)
+    }
+
     /// True when there are no particles.
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()

@@ -33,7 +33,7 @@ pub struct StepRule {
 
 /// A frame's steps: Δt and how many fill the frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FrameSteps {
+pub struct StepPlan {
     pub dt: f64,
     pub steps: u32,
 }
@@ -61,7 +61,7 @@ pub struct Clock {
 
 impl StepRule {
     /// The steps of a frame after one whose particles moved at most `speed` (m/s).
-    pub fn frame_steps(&self, speed: f64) -> Result<FrameSteps, TooFast> {
+    pub fn frame_steps(&self, speed: f64) -> Result<StepPlan, TooFast> {
         let mut dt = self.dt_max;
         if let Some(c) = self.cfl_velocity {
             let v = speed + self.gravity * self.frame;
@@ -76,7 +76,7 @@ impl StepRule {
             dt = dt.min(needed);
         }
         let steps = (self.frame / dt).ceil().clamp(1.0, MAX_STEPS);
-        Ok(FrameSteps {
+        Ok(StepPlan {
             dt: self.frame / steps,
             steps: steps as u32,
         })

@@ -21,7 +21,7 @@ use super::regions::{ObjectRegions, ParticleKey};
 use super::{BuildReport, Scene, SceneError};
 use crate::derive::Binding;
 use crate::render::Splats;
-use crate::sim::time_step::{FrameSteps, StepRule};
+use crate::sim::time_step::{StepPlan, StepRule};
 use crate::sim::{
     cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams,
 };
@@ -161,12 +161,7 @@ pub fn prepare(
         let picked = moving[i].as_deref().expect("simulated");
         body.add(scene, i, gather(&splats, picked), &grid, spec, &mut out)?;
     }
-    let speed = body
-        .particles
-        .v
-        .iter()
-        .map(|v| v.length())
-        .fold(0.0, f64::max);
+    let speed = body.particles.max_speed();
     let (step_rule, first) = time_step(scene, spec, body.dt_cfl, speed, &mut body.warnings)?;
     let (dt, steps_per_frame) = (first.dt, first.steps);
     let params = StepParams {
@@ -558,7 +553,7 @@ fn time_step(
     dt_cfl: f64,
     speed: f64,
     warnings: &mut Vec<String>,
-) -> Result<(StepRule, FrameSteps), SceneError> {
+) -> Result<(StepRule, StepPlan), SceneError> {
     let o = scene.origin.as_str();
     let frame = 1.0 / f64::from(scene.output.fps);
     let dt = match spec.dt {
