@@ -438,9 +438,10 @@ fn sizes_past_the_buffer_limits_are_refused_up_front() {
     );
     assert!(frames_in(&d.join("o")).is_empty());
 
-    // A grid of 376³ nodes: the scatter paths hold its nodes in a pool of the blocks the
-    // particles reach, so it runs; the gather path (two-field separation) indexes every
-    // one of its 52M base cells, past lavapipe's 128 MiB binding.
+    // A grid of 380³ nodes (the domain and the walls' padding): the scatter paths hold its
+    // nodes in a pool of the blocks the particles reach, so it runs; the gather path
+    // (two-field separation) indexes every one of its 54M base cells, past lavapipe's
+    // 128 MiB binding.
     let fine = sim_scene_with(2, 200.0, r#"{ "spacing": 0.0016 }"#)
         .replace("\"dx\": 0.05", "\"dx\": 0.0016")
         .replace("[0.15, 0.15, 0.15]", "[0.03, 0.03, 0.03]");
@@ -479,7 +480,7 @@ fn sizes_past_the_buffer_limits_are_refused_up_front() {
     );
     let line = expect_error(&splatter(d, &["render", "fine_gather.json", "--out", "o"]));
     assert!(
-        line.contains("cell ranges of 52313624 grid cells") && line.contains("simulation.dx"),
+        line.contains("cell ranges of 54010152 grid cells") && line.contains("simulation.dx"),
         "{line}"
     );
 }

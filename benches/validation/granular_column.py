@@ -4,10 +4,11 @@ collapse and angle of repose").
 
 A quasi-2D (plane-strain) column of sand collapses on a sticky floor against a frictionless
 end wall, released from rest with no gate. The slab is one cell thick in y inside a domain
-four cells deep, so every grid node lies in the band of the y walls; with `"walls":
-"slip"` those nodes lose their y velocity, which is exactly plane strain (the wall band is
-3 cells: src/sim/boundary.rs). The x = lo wall is the end wall of Lube et al.'s channel
-(slip: frictionless), effectively at x = lo + 2 dx; the floor (sticky) at z = lo + 2 dx.
+one cell deep, so every grid node lies in the band of the y walls (the grid reaches two
+cells past each face of the domain, and the wall band is three cells: src/sim/boundary.rs);
+with `"walls": "slip"` those nodes lose their y velocity, which is exactly plane strain.
+The x = 0 face is the end wall of Lube et al.'s channel (slip: frictionless), the z = 0
+face the floor (sticky).
 
 Measured from the last frame's particles (--export-particles):
   * the runout  (d_inf - d_i) / d_i, d_inf the front of the deposit: the last x bin (bins
@@ -74,14 +75,14 @@ def column_size(a):
 
 def scene(a, phi):
     d, h = column_size(a)
-    wall = 2 * DX  # the slip band's edge: nodes 0, 1, 2
-    floor = 2 * DX
+    wall = 0.0  # the domain's faces are the walls
+    floor = 0.0
     reach = d * (1.0 + 1.6 * max(lube(a), 0.8))  # room for a runout well past Lube's
-    hi = [wall + reach + 4 * DX, 4 * DX, floor + h + 4 * DX]
+    hi = [reach + 2 * DX, DX, h + 2 * DX]
     t_end = 4.0 * math.sqrt(h / G) + 0.8 * math.sqrt(reach / G) + 0.5
     fps = 10
     frames = int(math.ceil(t_end * fps)) + 1
-    centre = [wall + d / 2, 2 * DX, floor + h / 2]
+    centre = [wall + d / 2, DX / 2, floor + h / 2]
     return {
         "description": f"Plane-strain granular column collapse (benches/validation/granular_column.py): "
                        f"a = {a}, d_i = {d:.3f} m, h_i = {h:.3f} m, drucker_prager phi {phi} deg, "
@@ -89,7 +90,7 @@ def scene(a, phi):
         "output": {"width": 64, "height": 64, "frames": frames, "fps": fps,
                    "background": [0.05, 0.05, 0.08]},
         "camera": {"fov_y_deg": 50, "path": {
-            "type": "orbit", "target": [hi[0] / 2, 2 * DX, h / 2], "radius": hi[0],
+            "type": "orbit", "target": [hi[0] / 2, DX / 2, h / 2], "radius": hi[0],
             "height": 0, "start_deg": -90, "turns": 0}},
         "simulation": {
             "dx": DX,

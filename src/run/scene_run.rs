@@ -224,7 +224,7 @@ pub(super) fn execute(
 /// adapter.
 fn check_grid_fits(gpu: &GpuContext, scene: &scene::Scene) -> Result<()> {
     if let Some(spec) = &scene.simulation {
-        let (lo, hi) = (DVec3::from(spec.domain.lo), DVec3::from(spec.domain.hi));
+        let (lo, hi) = spec.grid_box();
         let cells = ((hi - lo) / spec.dx - 1e-9).ceil().max(DVec3::ONE);
         let nodes = cells + 1.0;
         if !nodes.is_finite() || nodes.element_product() >= f64::from(u32::MAX) {
@@ -431,7 +431,11 @@ impl<'a> Simulation<'a> {
         let before = self.clock;
         let plan = match s.step_rule.frame_steps(before.speed) {
             Ok(plan) => plan,
-            Err(e) => bail!("frame {frame}: {e}; try a smaller simulation.cfl, or a scene whose speeds the grid can follow"),
+            Err(e) => {
+                let (culprit, _) =
+                    self.describe_particle(gpu, scene, self.fastest_particle(gpu)?)?;
+                bail!("frame {frame}: {e}; the fastest is {culprit}; try a smaller simulation.cfl, or a scene whose speeds the grid can follow")
+            }
         };
         let w = if frame > first {
             self.sim.set_dt(gpu, plan.dt)?;
@@ -463,6 +467,15 @@ impl<'a> Simulation<'a> {
             );
         }
         Ok(if frame > first { plan.steps } else { 0 })
+    }
+
+    /// The index of the fastest particle (read back from the GPU).
+    fn fastest_particle(&self, gpu: &GpuContext) -> Result<u32> {
+        let state = self.sim.read_particles(gpu, &self.setup.particles)?;
+        let speed = |p: usize| state.v[p].length();
+        let fastest =
+            (0..state.v.len()).fold(0, |best, p| if speed(p) > speed(best) { p } else { best });
+        Ok(fastest as u32)
     }
 
     /// Particle `p` as a failure names it: its object, material, where it is and how fast

@@ -39,7 +39,8 @@ pub struct SimulationSpec {
     /// and this is ignored (with a warning).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cfl_velocity: Option<f64>,
-    /// The simulated box: only what moves is gridded.
+    /// The simulated box: only what moves is gridded. Its faces are where the walls and the
+    /// ground act ([`SimulationSpec::grid_box`]).
     pub domain: DomainSpec,
     /// Default [0, 0, −9.8] (z up).
     #[serde(default = "default_gravity")]
@@ -171,6 +172,19 @@ impl TransferSpec {
 pub struct DomainSpec {
     pub lo: [f64; 3],
     pub hi: [f64; 3],
+}
+
+impl SimulationSpec {
+    /// The grid's box: `domain` grown by (band − 1)Δx on every side. A wall condition acts
+    /// on the band of nodes next to a grid face and material meets it at the band's
+    /// innermost node, (band − 1)Δx in (`sim::boundary`); growing the box by that much puts
+    /// the wall, and the ground, on the face of the domain the scene wrote. (An upper
+    /// face lies on the domain's only when its extent is a whole number of cells; the
+    /// grid rounds it up.)
+    pub fn grid_box(&self) -> (DVec3, DVec3) {
+        let pad = DVec3::splat(f64::from(crate::sim::WALL_BAND - 1) * self.dx);
+        (vec3(self.domain.lo) - pad, vec3(self.domain.hi) + pad)
+    }
 }
 
 /// `sticky` (v = 0), `slip` (normal velocity removed) or `separate` (only the velocity into

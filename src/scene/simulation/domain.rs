@@ -41,7 +41,8 @@ pub(super) fn surface_of(
     Ok(Some(crate::scene::surface::build(splats, grid, condition)))
 }
 
-/// The grid over `simulation.domain` at `simulation.dx`, validated.
+/// The grid over `simulation.domain` at `simulation.dx`, validated; it reaches past the
+/// domain by the walls' padding ([`SimulationSpec::grid_box`]).
 pub(super) fn grid_of(spec: &SimulationSpec, o: &str) -> Result<Grid, SceneError> {
     let (lo, hi) = (vec3(spec.domain.lo), vec3(spec.domain.hi));
     if !(lo.is_finite() && hi.is_finite() && hi.cmpgt(lo).all()) {
@@ -54,15 +55,15 @@ pub(super) fn grid_of(spec: &SimulationSpec, o: &str) -> Result<Grid, SceneError
     }
     let dx = spec.dx;
     let cells = ((hi - lo) / dx).ceil();
-    if !(dx.is_finite() && dx > 0.0) || cells.min_element() < 4.0 || cells.element_product() > 64e6
-    {
+    if !(dx.is_finite() && dx > 0.0) || cells.element_product() > 64e6 {
         return Err(SceneError::invalid(
             o,
             "simulation.dx",
             dx,
-            "a spacing > 0 giving 4 to 400 cells per axis (at most 64M cells)",
+            "a spacing > 0 giving at most 64M cells over the domain",
         ));
     }
+    let (lo, hi) = spec.grid_box();
     Ok(Grid::new(lo, hi, dx))
 }
 
@@ -104,4 +105,13 @@ pub(super) fn boundaries_of(spec: &SimulationSpec, o: &str) -> Result<Boundaries
         colliders,
         surface: None,
     })
+}
+
+/// Whether a particle at `x` lies in `simulation.domain`, or at most half a cell outside
+/// it: an object resting on the ground or touching a wall has its outermost particles
+/// about that close to the face, and the grid's padding still holds their whole stencil.
+pub(super) fn inside_domain(spec: &SimulationSpec, x: DVec3) -> bool {
+    let slack = DVec3::splat(0.5 * spec.dx);
+    let (lo, hi) = (vec3(spec.domain.lo) - slack, vec3(spec.domain.hi) + slack);
+    x.is_finite() && x.cmpge(lo).all() && x.cmple(hi).all()
 }

@@ -369,13 +369,13 @@ impl Bodies {
                 None => (m_index, density),
                 Some(r) => (m_index + 1 + *r as u32, regions.materials[*r].1),
             };
-            if grid.stencil(x).is_none() {
+            if !inside_domain(spec, x) {
                 let (lo, hi) = (vec3(spec.domain.lo), vec3(spec.domain.hi));
                 return Err(SceneError::invalid(
                     o,
                     format!("objects[{i}]"),
                     format!("a particle at {x}"),
-                    format!("every simulated Gaussian and particle inside simulation.domain with 1.5 Δx to spare ({lo} .. {hi})"),
+                    format!("every simulated particle inside simulation.domain ({lo} .. {hi}), within half a cell; enlarge the domain or move the object"),
                 ));
             }
             self.particles.push(
