@@ -141,6 +141,71 @@ impl ReturnCase {
     }
 }
 
+/// The watchdog's counters: one `atomic<u32>` word each in the `flags` buffer that the
+/// step passes write and [`super::GpuSim::take_watchdog`] reads once a frame (WGSL
+/// `WATCH_*`, the array's length `WATCH_SLOTS`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WatchSlot {
+    /// Particles with a non-finite position, velocity or F (`g2p.wgsl`).
+    Nonfinite,
+    /// Particles whose stencil left the grid (`g2p.wgsl`).
+    Escaped,
+    /// The first step that counted a failure, as its bitwise NOT so that `atomicMax`
+    /// keeps the earliest (0: none).
+    FirstStep,
+    /// Steps since the last read (`compact_blocks.wgsl`).
+    Step,
+    /// The most active blocks of one step (`compact_blocks.wgsl`).
+    ActiveBlocksMax,
+    /// Active blocks that found the pool full (`compact_blocks.wgsl`).
+    PoolOverflow,
+    /// Particles past the fixed-point P2G's speed bound (`p2g_fixed.wgsl`).
+    FixedPointRange,
+    /// The largest particle speed, as the bits of a non-negative f32 (which order as the
+    /// floats do).
+    SpeedMax,
+    /// The bitwise NOT of the lowest index of a particle counted as non-finite or escaped
+    /// (0: none).
+    FirstParticle,
+}
+
+impl WatchSlot {
+    /// Every slot, in word order.
+    pub const ALL: [WatchSlot; 9] = [
+        WatchSlot::Nonfinite,
+        WatchSlot::Escaped,
+        WatchSlot::FirstStep,
+        WatchSlot::Step,
+        WatchSlot::ActiveBlocksMax,
+        WatchSlot::PoolOverflow,
+        WatchSlot::FixedPointRange,
+        WatchSlot::SpeedMax,
+        WatchSlot::FirstParticle,
+    ];
+
+    /// Words in the buffer.
+    pub const COUNT: u32 = Self::ALL.len() as u32;
+
+    /// The slot's word index (WGSL `WATCH_*`).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    fn wgsl_name(self) -> &'static str {
+        match self {
+            WatchSlot::Nonfinite => "WATCH_NONFINITE",
+            WatchSlot::Escaped => "WATCH_ESCAPED",
+            WatchSlot::FirstStep => "WATCH_FIRST_STEP",
+            WatchSlot::Step => "WATCH_STEP",
+            WatchSlot::ActiveBlocksMax => "WATCH_ACTIVE_BLOCKS_MAX",
+            WatchSlot::PoolOverflow => "WATCH_POOL_OVERFLOW",
+            WatchSlot::FixedPointRange => "WATCH_FIXED_POINT_RANGE",
+            WatchSlot::SpeedMax => "WATCH_SPEED_MAX",
+            WatchSlot::FirstParticle => "WATCH_FIRST_PARTICLE",
+        }
+    }
+}
+
 /// The constants the material modules read (`shaders/sim/nacc.wgsl`), name and value.
 pub fn material_constants() -> Vec<(&'static str, u32)> {
     let variants = ReturnMapping::ALL
@@ -164,7 +229,14 @@ pub fn step_constants() -> Vec<(&'static str, u32)> {
     let shapes = ColliderShape::KINDS
         .iter()
         .map(|s| (s.wgsl_name(), s.gpu_code()));
-    limits.into_iter().chain(kinds).chain(shapes).collect()
+    let watch = WatchSlot::ALL.map(|w| (w.wgsl_name(), w.index() as u32));
+    limits
+        .into_iter()
+        .chain([("WATCH_SLOTS", WatchSlot::COUNT)])
+        .chain(kinds)
+        .chain(shapes)
+        .chain(watch)
+        .collect()
 }
 
 fn declare(title: &str, constants: &[(&'static str, u32)]) -> String {
@@ -264,6 +336,14 @@ mod tests {
                 "{variant:?}"
             );
         }
+        for slot in WatchSlot::ALL {
+            assert_eq!(
+                step_constant(slot.wgsl_name()),
+                slot.index() as u32,
+                "{slot:?}"
+            );
+        }
+        assert_eq!(step_constant("WATCH_SLOTS"), WatchSlot::COUNT);
         for case in ReturnCase::ALL {
             assert_eq!(case.gpu_code(), step_constant(case.wgsl_name()), "{case:?}");
             assert_eq!(ReturnCase::from_gpu_code(case.gpu_code()), Some(case));
@@ -302,6 +382,33 @@ mod tests {
                     "{name} is declared by hand in a shader; it comes from sim::codes"
                 );
             }
+        }
+    }
+
+    /// Every pass that binds the watchdog's `flags` declares them as the buffer
+    /// `take_watchdog` reads: `WATCH_SLOTS` words, not a length typed by hand.
+    #[test]
+    fn every_pass_declares_the_watchdog_by_its_slot_count() {
+        let passes = [
+            ("g2p", include_str!("../../shaders/sim/step/g2p.wgsl")),
+            (
+                "compact_blocks",
+                include_str!("../../shaders/sim/step/compact_blocks.wgsl"),
+            ),
+            (
+                "p2g_fixed",
+                include_str!("../../shaders/sim/step/p2g_fixed.wgsl"),
+            ),
+        ];
+        for (name, src) in passes {
+            let decl = src
+                .lines()
+                .find(|l| l.contains("> flags:"))
+                .unwrap_or_else(|| panic!("{name}.wgsl binds no watchdog flags"));
+            assert!(
+                decl.contains("array<atomic<u32>, WATCH_SLOTS>"),
+                "{name}.wgsl: {decl}"
+            );
         }
     }
 }

@@ -31,9 +31,9 @@ pub use super::step::layout::{
 };
 /// Bytes of the largest per-particle record (F, C: `mat3x3<f32>`), which sizes the pages.
 const MAT3_BYTES: u64 = 48;
-/// The watchdog's counters (`flags` of `shaders/sim/step/g2p.wgsl`): 12 words.
-const WATCHDOG_BYTES: u64 = 48;
-use super::codes::BLOCK;
+/// The watchdog's counters (`flags` of the step passes): one word per [`WatchSlot`].
+const WATCHDOG_BYTES: u64 = WatchSlot::COUNT as u64 * 4;
+use super::codes::{WatchSlot, BLOCK};
 
 mod p2g_path;
 mod p2g_race;
@@ -735,8 +735,8 @@ impl GpuSim {
             + b.grid_velocity_change.bytes()
     }
 
-    /// The watchdog (docs/method.md §2): particles that became non-finite, and particles that left the
-    /// domain, over the steps since the last call (a 16-byte readback; then cleared).
+    /// The watchdog (docs/method.md §2.3): its counters over the steps since the last call
+    /// (one word per [`WatchSlot`] read back, then cleared).
     pub fn take_watchdog(&self, gpu: &GpuContext) -> Result<Watchdog, GpuError> {
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sim watchdog readback"),
@@ -749,17 +749,19 @@ impl GpuSim {
         enc.clear_buffer(&self.buffers.flags, 0, None);
         gpu.queue.submit([enc.finish()]);
         let bytes = read_buffer(gpu, &staging)?;
-        let v: [u32; 12] = bytemuck::pod_read_unaligned(&bytes[..WATCHDOG_BYTES as usize]);
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes[..WATCHDOG_BYTES as usize]);
+        let v = |slot: WatchSlot| words[slot.index()];
+        // The first step and particle are stored as bitwise NOTs (0: none).
+        let not_zero = |w: u32| (w != 0).then_some(!w);
         Ok(Watchdog {
-            nonfinite: v[0],
-            escaped: v[1],
-            // g2p.wgsl stores the bitwise NOT of the step so that atomicMax keeps the first.
-            first_step: (v[2] != 0).then_some(!v[2]),
-            active_blocks_max: v[4],
-            pool_overflow: v[5],
-            fixed_point_range: v[6],
-            speed_max: f32::from_bits(v[7]),
-            first_particle: (v[8] != 0).then_some(!v[8]),
+            nonfinite: v(WatchSlot::Nonfinite),
+            escaped: v(WatchSlot::Escaped),
+            first_step: not_zero(v(WatchSlot::FirstStep)),
+            active_blocks_max: v(WatchSlot::ActiveBlocksMax),
+            pool_overflow: v(WatchSlot::PoolOverflow),
+            fixed_point_range: v(WatchSlot::FixedPointRange),
+            speed_max: f32::from_bits(v(WatchSlot::SpeedMax)),
+            first_particle: not_zero(v(WatchSlot::FirstParticle)),
         })
     }
 

@@ -13,7 +13,7 @@
 // The watchdog's counters (g2p.wgsl); [3] counts the steps since the last read: this pass
 // runs once per step, so it keeps the clock; [4] the most active blocks in a step, [5]
 // blocks left without a pool slot (overflow), both since the last read.
-@group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>, 8>;
+@group(0) @binding(4) var<storage, read_write> flags: array<atomic<u32>, WATCH_SLOTS>;
 
 const MAX_GROUPS_X: u32 = 65535u;
 
@@ -23,7 +23,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     read_consts();
     let b = flat_id(wid, nwg, lid);
     if b == 0u {
-        atomicAdd(&flags[3], 1u);
+        atomicAdd(&flags[WATCH_STEP], 1u);
     }
     let nb = blocks_per_axis();
     if b >= nb.x * nb.y * nb.z {
@@ -35,10 +35,10 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     block_flags[b] = 0u;
     let slot = atomicAdd(&block_args[3], 1u);
-    atomicMax(&flags[4], slot + 1u);
+    atomicMax(&flags[WATCH_ACTIVE_BLOCKS_MAX], slot + 1u);
     if slot >= consts.pool_blocks {
         block_slot[b] = NO_SLOT;
-        atomicAdd(&flags[5], 1u);
+        atomicAdd(&flags[WATCH_POOL_OVERFLOW], 1u);
         return;
     }
     block_slot[b] = slot;

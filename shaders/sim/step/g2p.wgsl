@@ -14,14 +14,9 @@
 @group(0) @binding(7) var grid_velocity: texture_2d<f32>;
 // What the step's forces changed at each node, Δv_i (read only with a FLIP/PIC blend).
 @group(0) @binding(16) var grid_velocity_change: texture_2d<f32>;
-// The watchdog's counters (docs/method.md §2): [0] particles with a non-finite position, velocity or
-// F; [1] particles whose stencil is off the grid (left the domain); [2] the first step that
-// counted one, stored as its bitwise NOT so that atomicMax keeps the earliest (0: none);
-// [3] steps since the last read (compact_blocks.wgsl); [7] the largest particle speed
-// (the bits of a non-negative f32, which order as the floats do); [8] the bitwise NOT of
-// the lowest index of a particle counted in [0] or [1] (0: none), so that a failure can
-// name it. Read and cleared once per frame.
-@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 12>;
+// The watchdog's counters (docs/method.md §2.3), one word per WATCH_* slot (their meanings
+// at sim::codes::WatchSlot). Read and cleared once per frame.
+@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, WATCH_SLOTS>;
 // What prepare.wgsl would compute for the next step, so that only the first step of a
 // submission runs it: the affine term (common.wgsl, affine_term), and on the gather path
 // (NEXT_KEYS, a constant G2p prepends) the base-cell sort key and the particle's index.
@@ -44,19 +39,21 @@ fn leave_key(p: u32, x: vec3<f32>) {
     }
 }
 
+// Counts particle p in `slot` (WATCH_NONFINITE or WATCH_ESCAPED); the bitwise NOTs keep
+// the lowest particle and the earliest step under atomicMax.
 fn count_failure(slot: u32, p: u32) {
     atomicAdd(&flags[slot], 1u);
-    atomicMax(&flags[8], ~(page.base + p));
+    atomicMax(&flags[WATCH_FIRST_PARTICLE], ~(page.base + p));
     // compact_blocks.wgsl has already counted this step
-    atomicMax(&flags[2], ~(atomicLoad(&flags[3]) - 1u));
+    atomicMax(&flags[WATCH_FIRST_STEP], ~(atomicLoad(&flags[WATCH_STEP]) - 1u));
 }
 
 // The largest speed of the frame: most particles only read it, so that the one word is
 // not written by every particle of every step.
 fn record_speed(speed: f32) {
     let bits = bitcast<u32>(speed);
-    if bits > atomicLoad(&flags[7]) {
-        atomicMax(&flags[7], bits);
+    if bits > atomicLoad(&flags[WATCH_SPEED_MAX]) {
+        atomicMax(&flags[WATCH_SPEED_MAX], bits);
     }
 }
 
@@ -73,9 +70,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let st = grid_stencil(xm.xyz);
     if !st.ok {
         if sim_is_finite3(xm.xyz) {
-            count_failure(1u, p);
+            count_failure(WATCH_ESCAPED, p);
         } else {
-            count_failure(0u, p);
+            count_failure(WATCH_NONFINITE, p);
         }
         let v = vv.xyz + consts.gravity * consts.dt;
         v_volume[p] = vec4<f32>(v, vv.w);
@@ -139,7 +136,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     deformation[p] = f_new;
     affine[p] = affine_term(m, f_new, plastic.alpha, c, xm.w, vv.w);
     if !(sim_is_finite3(v_new) && sim_is_finite_mat3(f_new)) {
-        count_failure(0u, p);
+        count_failure(WATCH_NONFINITE, p);
     } else {
         record_speed(length(v_new));
     }

@@ -8,7 +8,7 @@
 // stays under 2^32 units (the high word then changes only by the low word's carry, so most
 // additions take one atomic) and no sum reaches 2^62, while every particle's reach —
 // |m v| + ‖affine‖ r over its stencil — stays under m times step.speed_bound. A particle
-// past it adds nothing and is counted in flags[6]: the watchdog stops the run; a sum is
+// past it adds nothing and is counted in flags[WATCH_FIXED_POINT_RANGE]: the watchdog stops the run; a sum is
 // never silently wrong.
 
 @group(0) @binding(1) var<storage, read> x_mass: array<vec4<f32>>;
@@ -19,7 +19,7 @@
 // every step; grid_from_sums.wgsl decodes them.
 @group(0) @binding(4) var<storage, read_write> grid_sum: array<atomic<u32>>;
 // The watchdog's counters (g2p.wgsl): [6] particles past the fixed-point range.
-@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, 8>;
+@group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, WATCH_SLOTS>;
 
 // The farthest a node of the quadratic stencil lies from its particle: 1.5·√3 Δx.
 const STENCIL_REACH: f32 = 2.6;
@@ -78,9 +78,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let a = affine[p];
     // Also false for a non-finite velocity or affine term.
     if !(length(mv) + frobenius(a) * STENCIL_REACH * consts.dx <= xm.w * step.speed_bound) {
-        atomicAdd(&flags[6], 1u);
+        atomicAdd(&flags[WATCH_FIXED_POINT_RANGE], 1u);
         // compact_blocks.wgsl has already counted this step (g2p.wgsl, count_failure)
-        atomicMax(&flags[2], ~(atomicLoad(&flags[3]) - 1u));
+        atomicMax(&flags[WATCH_FIRST_STEP], ~(atomicLoad(&flags[WATCH_STEP]) - 1u));
         return;
     }
     let mass_scale = power_of_two(step.mass_exponent);
