@@ -10,9 +10,10 @@ all frames (the fastest particle over the drop speed).
 Usage:
   python3 benches/shatter/brittle_sweep.py scenes OUT_DIR [RUN ...]
       writes OUT_DIR/NAME.json for each RUN,
-      FLESH_STRENGTH:SPEED:DX[:FRAMES[:SEED_SHIFT[:MODULUS]]]
+      FLESH_STRENGTH:SPEED:DX[:FRAMES[:SEED_SHIFT[:MODULUS[:SOFTENING]]]]
       (SEED_SHIFT is added to every brittle material's seed: another draw of strengths;
-      MODULUS replaces every brittle material's Weibull modulus, "u" for uniform strength)
+      MODULUS replaces every brittle material's Weibull modulus, "u" for uniform strength,
+      "-" to keep it; SOFTENING replaces every brittle material's softening ratio)
       (default: the 4 x 3 grid around the shipped point, strengths x 0.75, 1, 1.25, 1.5 and
       speeds x 0.75, 0.875, 1, and the shipped point at dx/1.5);
   python3 benches/shatter/brittle_sweep.py run SPLATTER OUT_DIR
@@ -42,7 +43,7 @@ def brittle_materials(obj):
         yield r["material"]
 
 
-def variant(scene, flesh, speed, dx, frames, shift=0, modulus=None):
+def variant(scene, flesh, speed, dx, frames, shift=0, modulus=None, softening=None):
     v = copy.deepcopy(scene)
     melon = next(o for o in v["objects"] if o.get("name") == "watermelon")
     base = melon["physics"]["material"]["strength"]
@@ -55,6 +56,8 @@ def variant(scene, flesh, speed, dx, frames, shift=0, modulus=None):
                 m.pop("reference_dx", None)
             elif modulus is not None:
                 m["weibull_modulus"] = float(modulus)
+            if softening is not None:
+                m["softening"] = softening
     melon["physics"]["velocity"] = [0, 0, -speed]
     v["simulation"]["dx"] = dx
     v["output"]["frames"] = frames
@@ -62,10 +65,11 @@ def variant(scene, flesh, speed, dx, frames, shift=0, modulus=None):
     return v
 
 
-def name_of(flesh, speed, dx, frames, shift=0, modulus=None):
+def name_of(flesh, speed, dx, frames, shift=0, modulus=None, softening=None):
     seed = f"_seed+{shift}" if shift else ""
     m = f"_m{modulus}" if modulus is not None else ""
-    return f"s{flesh:g}_v{speed:g}_dx{dx:g}_f{frames}{seed}{m}"
+    soft = f"_soft{softening:g}" if softening is not None else ""
+    return f"s{flesh:g}_v{speed:g}_dx{dx:g}_f{frames}{seed}{m}{soft}"
 
 
 def make(scenes, out, runs):
@@ -85,10 +89,12 @@ def make(scenes, out, runs):
         flesh, speed, dx = float(parts[0]), float(parts[1]), float(parts[2])
         frames = int(parts[3]) if len(parts) > 3 else frames0
         shift = int(parts[4]) if len(parts) > 4 else 0
-        modulus = parts[5] if len(parts) > 5 else None
-        path = os.path.join(out, name_of(flesh, speed, dx, frames, shift, modulus) + ".json")
-        json.dump(variant(scene, flesh, speed, dx, frames, shift, modulus), open(path, "w"),
-                  indent=1)
+        modulus = parts[5] if len(parts) > 5 and parts[5] != "-" else None
+        softening = float(parts[6]) if len(parts) > 6 else None
+        name = name_of(flesh, speed, dx, frames, shift, modulus, softening)
+        path = os.path.join(out, name + ".json")
+        json.dump(variant(scene, flesh, speed, dx, frames, shift, modulus, softening),
+                  open(path, "w"), indent=1)
         print(path)
 
 
