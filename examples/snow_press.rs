@@ -1,5 +1,5 @@
 //! Snow packed under load: a block of Stomakhin et al.'s reference snow in a frictionless
-//! box, pressed by a plate (`splatter::study::snow_press`, docs/accuracy.md *Snow*).
+//! box, pressed by a plate (`splatter::study::snow_press`, docs/notes/snow.md *Snow*).
 //!
 //! `cargo run --release --example snow_press [-- COMPRESSION [SPEED]]`
 //!

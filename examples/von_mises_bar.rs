@@ -1,5 +1,5 @@
 //! A von Mises bar pulled past yield and released, and one pulled to half its yield strain,
-//! on the CPU reference step (`splatter::study::plastic_bar`, docs/accuracy.md *Metal and
+//! on the CPU reference step (`splatter::study::plastic_bar`, docs/notes/metal.md *Metal and
 //! plasticine*).
 //!
 //! `cargo run --release --example von_mises_bar [-- DX [HARDENING_PA]]`

@@ -438,7 +438,7 @@ fn watermelon_breaks_jelly_stays_whole_sandcastle_crumbles() {
 /// the impact, and the kinetic plus gravitational energy never rises above its start. A
 /// law or a scene that stopped localising damage (a fruit that bounces whole, or one that
 /// turns to a heap of rubble) fails here. On coarser grids (Δx 0.02 and draft's 0.03,
-/// 15 and 10 cells across the fruit) the same setup stays one piece: docs/accuracy.md.
+/// 15 and 10 cells across the fruit) the same setup stays one piece: docs/notes/brittle.md.
 #[test]
 fn the_flat_watermelon_drop_shatters() {
     const FRAMES: usize = 20;

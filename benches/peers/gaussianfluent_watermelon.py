@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The official GaussianFluent release's watermelon drop, run by the release's own Warp MPM
-solver on the CPU, on our watermelon's particles (docs/accuracy.md, "The release's solver
+solver on the CPU, on our watermelon's particles (docs/notes/watermelon-nacc.md, "The release's solver
 as a peer"). Not run by CI.
 
   python3 benches/peers/gaussianfluent_watermelon.py scene N OUT.json [elastic]

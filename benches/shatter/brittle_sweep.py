@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The brittle watermelon's sweep (docs/accuracy.md, "A brittle watermelon").
+"""The brittle watermelon's sweep (docs/notes/brittle.md, "A brittle watermelon").
 
 Each run is scenes/watermelon_drop.json with its brittle materials' mean strength scaled
 (the flesh's sigma_bar; rind and white rind keep their ratio to it), dropped at another

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""CD-MPM's own watermelon set on our flat drop (docs/accuracy.md, "CD-MPM's watermelon set").
+"""CD-MPM's own watermelon set on our flat drop (docs/notes/brittle.md, "CD-MPM's watermelon set").
 
 CD-MPM's watermelon smash (penn-graphics-research/ziran2019, Projects/mpm/MpmInit3D.h,
 test 1) is NACC on the Borden neo-Hookean with: rind E 2000, nu 0.4, alpha0 ln 0.99, beta 2,

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Scenes for the watermelon drop at a GPU's resolutions (docs/accuracy.md, "On a GPU").
+"""Scenes for the watermelon drop at a GPU's resolutions (docs/notes/watermelon-nacc.md, "On a GPU").
 
 Each scene is scenes/watermelon_drop_nacc.json (Table A1's materials as read, rho 2, 8 m/s onto a
 flat table with friction 0.5, continuous return mapping) at one grid spacing, with one

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Scenes for the watermelon's ingredient table (docs/accuracy.md, "Ingredients").
+"""Scenes for the watermelon's ingredient table (docs/notes/watermelon-nacc.md, "Ingredients").
 
 Each variant is scenes/watermelon_drop_nacc.json with the ingredients that differ from the
 official GaussianFluent release's watermelon switched to the release's values, cut to 6

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The pieces a render would show with GaussianFluent's render filter (docs/accuracy.md).
+"""The pieces a render would show with GaussianFluent's render filter (docs/notes/brittle.md, "What the release's renderer hides").
 
 GaussianFluent's release hides broken material when it renders its watermelon: every
 particle whose particle_Jp (its NACC alpha, log Jp, starting at -0.04) exceeds 0.4 gets

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Every shipped scene at a finer resolution (docs/accuracy.md, "Every scene, finer").
+"""Every shipped scene at a finer resolution (docs/notes/stability.md, "Every scene, finer").
 
 Renders each scenes/*.json with `--quality high` (dx and every spacing halved: 8x the
 particles) for the first frames at a small image size, and prints per scene: frames

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Granular column collapse with the drucker_prager model (docs/accuracy.md, "Sand: column
+"""Granular column collapse with the drucker_prager model (docs/notes/sand.md, "Sand: column
 collapse and angle of repose").
 
 A quasi-2D (plane-strain) column of sand collapses on a sticky floor against a frictionless

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The heap that `scenes/sand_column.json` leaves: its flank's slope (docs/accuracy.md,
+"""The heap that `scenes/sand_column.json` leaves: its flank's slope (docs/notes/sand.md,
 "Sand: column collapse and angle of repose").
 
 The scene is a square column of sand resting on the domain's floor (z = 0, the sticky

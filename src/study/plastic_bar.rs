@@ -1,5 +1,5 @@
 //! A bar pulled past yield (von Mises, `sim::models::VonMises`) on the CPU reference step
-//! (f64): the validation of docs/accuracy.md, *Metal and plasticine: a bar pulled past
+//! (f64): the validation of docs/notes/metal.md, *Metal and plasticine: a bar pulled past
 //! yield*, shared by `examples/von_mises_bar.rs` and `tests/plastic_bar.rs`.
 //!
 //! The bar lies along x between two grips: the nodes at or beyond each end of the gauge

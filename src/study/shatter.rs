@@ -4,7 +4,7 @@
 //! and over all frames (the fastest particle against the impact speed, the kinetic plus
 //! gravitational energy against its start, non-finite particles). It answers whether the
 //! pattern converges, from which Δx pieces appear, and what the continuous mapping changes
-//! against the center mapping (docs/accuracy.md).
+//! against the center mapping (docs/notes/watermelon-nacc.md).
 //!
 //! Fine spacings cost a CPU hours, so the study can also run one quarter of the fruit
 //! between two symmetry planes ([`cut_to_quarter`]), and each invocation's runs are merged

@@ -1,7 +1,7 @@
 //! Snow packed under load (`sim::models::Snow`) on the CPU reference step (f64): a block
 //! in a frictionless box (the domain's separating walls, which the block fills wall to
 //! wall) pressed by a plate that comes down at a constant speed — confined (uniaxial)
-//! compaction, docs/accuracy.md *Snow: a snowball on impact and under load*. Used by
+//! compaction, docs/notes/snow.md *Snow: a snowball on impact and under load*. Used by
 //! `examples/snow_press.rs`.
 //!
 //! The plate is the grid nodes at or above its height: their vertical velocity is the
@@ -15,7 +15,7 @@
 //!
 //! Snow stiffens by e^{ξ (1 − Jᴾ)} as it packs, and the sound speed with the square root of
 //! that, so Δt is recomputed every step from the stiffest particle (the scene file's Δt is
-//! fixed at the start: docs/accuracy.md).
+//! fixed at the start: docs/notes/snow.md).
 
 use glam::DVec3;
 

@@ -16,7 +16,7 @@ pub const DENSITY_LITERAL: f64 = 2.0;
 pub const DENSITY_READ: f64 = 200.0;
 
 /// The explicit step is stable below CFL ≈ 1 in theory; the stability atlas
-/// (docs/accuracy.md) saw every return mapping fail from 1.5 on.
+/// (docs/notes/stability.md) saw every return mapping fail from 1.5 on.
 pub const CFL_UNSTABLE: f64 = 1.0;
 
 /// One material of an example: (example, component, E, ν), as in docs/method.md §9.1.
