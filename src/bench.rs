@@ -12,9 +12,6 @@ use crate::render::splats::sym3_from_mat3;
 use crate::render::{Camera, GpuRenderer, Splats};
 use crate::rng::SplitMix64;
 
-mod peer;
-pub use peer::Peer;
-
 /// `n` Gaussians of SH degree `degree` filling a ball of radius 1, sized like a trained
 /// capture of that density (scale ≈ the mean spacing), random orientations and colours.
 pub fn synthetic_splats(n: usize, degree: u32, seed: u64) -> Splats {
@@ -195,7 +192,7 @@ pub fn render_bench(
     Ok(())
 }
 
-/// One timed render case (`bench render`, `bench suite`): medians over the repeats.
+/// One timed render case (`bench render`, `splatter-lab suite`): medians over the repeats.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RenderTiming {
     pub render_ms: f64,
@@ -304,24 +301,20 @@ fn lit_frame(gpu: &GpuContext, n: usize, camera: &Camera, repeat: usize) -> Resu
 /// material (the paper's fruit parameters), the brittle law and fixed corotated (the
 /// peers' usual material), for 20k particles on a 64³ grid and (unless `quick`) 1M particles on a 128³
 /// grid; plus GPU memory per particle. With `per_pass`, each case is also broken down by
-/// pass. With `peer`, the 20k fixed-corotated case is also stepped by that peer in the same
-/// run, and the ratios printed. With `separation`, the fracturing cases only (NACC and
-/// brittle), with two-field separation on the gather path.
+/// pass. With `separation`, the fracturing cases only (NACC and brittle), with two-field
+/// separation on the gather path. Returns the 20k cases' timings (what a peer is compared
+/// with).
 pub fn sim_bench(
     gpu: &GpuContext,
     what: SimBench,
-    peer: Option<Peer>,
     out: &mut dyn Write,
-) -> Result<()> {
+) -> Result<Vec<(SimModel, SimTiming)>> {
     let SimBench {
         steps,
         quick,
         per_pass,
         separation,
     } = what;
-    if let Some(peer) = peer {
-        peer.check()?;
-    }
     writeln!(out, "adapter: {}", gpu.describe())?;
     if separation {
         writeln!(
@@ -392,26 +385,7 @@ pub fn sim_bench(
             }
         }
     }
-    if let Some(peer) = peer {
-        let case = SimCase::with_model(20_000, 64, SimModel::FixedCorotated);
-        let run = peer.run(&case, steps)?;
-        let (line, peer_ms) = (&run.line, run.ms);
-        writeln!(out, "peer: {line}: {peer_ms:.2} ms/step")?;
-        for pass in &run.passes {
-            writeln!(out, "peer {pass}")?;
-        }
-        for (model, t) in &small {
-            writeln!(
-                out,
-                "peer ratio: splatter {} {} / {} fixed_corotated = {:.2}",
-                model.name(),
-                t.p2g,
-                peer.name(),
-                t.ms_per_step / peer_ms
-            )?;
-        }
-    }
-    Ok(())
+    Ok(small)
 }
 
 /// Which P2G path a long run on `gpu` takes by default, and the race's times where the
@@ -720,7 +694,7 @@ impl SimCase {
     }
 }
 
-/// One timed simulation case (`bench sim`, `bench suite`).
+/// One timed simulation case (`bench sim`, `splatter-lab suite`).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SimTiming {
     pub particles: usize,

@@ -9,7 +9,6 @@ use splatter::farm::{self, FarmError};
 use splatter::gpu::BackendChoice;
 use splatter::run::{Input, RunOptions};
 use splatter::scene;
-use splatter::sim::nacc::ReturnMapping;
 
 #[derive(Parser)]
 #[command(
@@ -98,19 +97,14 @@ pub(crate) enum BenchWhat {
         /// Also break each case down by pass (each pass run alone and waited for).
         #[arg(long)]
         per_pass: bool,
-        /// Also step the 20k fixed-corotated case in a peer, in the same run, and print the
-        /// ratios (taichi: `benches/peers/taichi_mpm.py`, needs `pip install taichi==1.7.4`;
-        /// slosh: `benches/peers/slosh/`, built beforehand as its README says).
-        #[arg(long, value_enum)]
-        peer: Option<splatter::bench::Peer>,
         /// Step the NACC cases with two-field separation (`"separation": "damage_gradient"`),
         /// on the gather path, the only one that runs it.
-        #[arg(long, conflicts_with = "peer")]
+        #[arg(long)]
         separation: bool,
         /// Instead, step one NACC case of about this many particles (a cube, 8 per cell, on
         /// a grid sized to hold it): arrays past one storage binding run page by page; wall
         /// time, bytes per particle, peak memory and the adapter's largest size.
-        #[arg(long, conflicts_with_all = ["quick", "per_pass", "peer", "separation"])]
+        #[arg(long, conflicts_with_all = ["quick", "per_pass", "separation"])]
         particles: Option<usize>,
     },
     /// Milliseconds per frame of the renderer: render passes, readback, PNG encoding.
@@ -140,48 +134,6 @@ pub(crate) enum BenchWhat {
         #[arg(long, default_value_t = 5)]
         repeat: usize,
     },
-    /// The sim, render and end-to-end benchmarks in one run: seconds per frame of each
-    /// paper example under scenes/ next to the paper's column (docs/method.md §9), written to
-    /// OUT/data/bench_suite.{json,md} (docs/performance.md).
-    Suite(Box<SuiteArgs>),
-    /// Convergence study and stability atlas on the CPU reference step: JSON and tables
-    /// in OUT/data/, charts in OUT/images/ (docs/accuracy.md).
-    Accuracy {
-        /// Output root (data/ and images/ go under it).
-        #[arg(long, default_value = "docs")]
-        out: PathBuf,
-        /// Which part to run.
-        #[arg(long, value_enum, default_value = "all")]
-        only: AccuracyPart,
-        /// Tiny sweeps (a smoke run; the numbers are not the documented ones).
-        #[arg(long)]
-        quick: bool,
-        /// Simulate nothing: redraw the tables and charts from OUT/data/*.json.
-        #[arg(long)]
-        redraw: bool,
-        /// Grid spacings of the shatter study instead of its default ones (metres,
-        /// comma-separated, coarse to fine; finer than 0.01 is meant for a GPU).
-        #[arg(long, value_delimiter = ',')]
-        shatter_dx: Option<Vec<f64>>,
-        /// Return mappings of the shatter study (comma-separated; default both).
-        #[arg(long, value_delimiter = ',', value_parser = return_mapping)]
-        shatter_mapping: Option<Vec<ReturnMapping>>,
-        /// Simulate one quarter of the fruit between two symmetry planes through its
-        /// centre: a quarter of the particles, so a CPU reaches finer spacings (no stills).
-        #[arg(long)]
-        shatter_quarter: bool,
-        /// Directory of the shipped scenes (the shatter study runs watermelon_drop_nacc.json).
-        #[arg(long, default_value = "scenes")]
-        scenes: PathBuf,
-    },
-}
-
-/// A return mapping by its scene-file name (`sim::nacc::ReturnMapping`).
-fn return_mapping(name: &str) -> Result<ReturnMapping, String> {
-    ReturnMapping::from_name(name).ok_or_else(|| {
-        let names: Vec<_> = ReturnMapping::ALL.iter().map(|m| m.name()).collect();
-        format!("expected one of {}", names.join(", "))
-    })
 }
 
 /// `--p2g`: a P2G path by name.
@@ -201,43 +153,6 @@ impl P2gArg {
             P2gArg::Fixed => P2gPath::Fixed,
         }
     }
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub(crate) enum AccuracyPart {
-    All,
-    Convergence,
-    Atlas,
-    /// The flat watermelon drop at several Δx, both return mappings.
-    Shatter,
-}
-
-#[derive(clap::Args)]
-pub(crate) struct SuiteArgs {
-    /// Output root (the JSON and the table go to OUT/data/).
-    #[arg(long, default_value = "docs")]
-    pub(crate) out: PathBuf,
-    /// Small cases only and 3 frames per example (a CPU machine).
-    #[arg(long)]
-    pub(crate) quick: bool,
-    /// Coarsen each example scene by this factor (dx and spacings × s: N / s³).
-    #[arg(long, default_value_t = 1.0)]
-    pub(crate) scale: f64,
-    /// Frames per example (frame 0 plus frames-1 timed frames); default 4, 3 with --quick.
-    #[arg(long)]
-    pub(crate) frames: Option<u32>,
-    /// Image size of the end-to-end runs.
-    #[arg(long, default_value_t = 480)]
-    pub(crate) width: u32,
-    #[arg(long, default_value_t = 360)]
-    pub(crate) height: u32,
-    /// Directory of the example scenes.
-    #[arg(long, default_value = "scenes")]
-    pub(crate) scenes: PathBuf,
-    /// Run the end-to-end examples' P2G on this path (as `render --p2g`), e.g. to
-    /// reproduce a failure on every path.
-    #[arg(long, value_name = "PATH")]
-    pub(crate) p2g: Option<P2gArg>,
 }
 
 #[derive(clap::Args)]

@@ -25,4 +25,3 @@ pub mod scene;
 pub mod sim;
 pub mod splat;
 pub mod spline;
-pub mod study;

@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Parser;
 
 use splatter::gpu::{BackendChoice, GpuContext};
@@ -13,8 +13,7 @@ use splatter::scene;
 
 mod cli;
 
-use cli::{AccuracyPart, BenchWhat, Cli, Command, SuiteArgs};
-use splatter::sim::nacc::ReturnMapping;
+use cli::{BenchWhat, Cli, Command};
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(
@@ -74,7 +73,6 @@ fn run(cli: Cli) -> Result<()> {
                     steps,
                     quick,
                     per_pass,
-                    peer,
                     separation,
                     particles,
                 },
@@ -90,7 +88,7 @@ fn run(cli: Cli) -> Result<()> {
                         per_pass,
                         separation,
                     };
-                    splatter::bench::sim_bench(&gpu, what, peer, out)
+                    splatter::bench::sim_bench(&gpu, what, out).map(|_| ())
                 }
             }
         }
@@ -121,87 +119,9 @@ fn run(cli: Cli) -> Result<()> {
             )
         }
         Some(Command::Bench {
-            what: BenchWhat::Suite(args),
-        }) => bench_suite(cli.backend, &args),
-        Some(Command::Bench {
             what: BenchWhat::Read { files, repeat },
         }) => splatter::bench::read_bench(&files, repeat.max(1), &mut std::io::stdout()),
-        Some(Command::Bench {
-            what:
-                BenchWhat::Accuracy {
-                    out,
-                    only,
-                    quick,
-                    redraw,
-                    scenes,
-                    shatter_dx,
-                    shatter_mapping,
-                    shatter_quarter,
-                },
-        }) => {
-            use splatter::study::{AccuracyOptions, Part};
-            if quick && !redraw && out == Path::new("docs") {
-                // The smoke sweeps would overwrite the documented numbers.
-                bail!("--quick runs smoke-sized sweeps: give an --out other than docs");
-            }
-            if let Some(bad) = shatter_dx
-                .iter()
-                .flatten()
-                .find(|dx| !(**dx > 0.0 && dx.is_finite()))
-            {
-                bail!("--shatter-dx {bad}: expected positive grid spacings in metres");
-            }
-            // In the study's order, each once.
-            let shatter_mappings: Option<Vec<ReturnMapping>> = shatter_mapping.map(|chosen| {
-                splatter::study::shatter::MAPPINGS
-                    .into_iter()
-                    .filter(|m| chosen.contains(m))
-                    .collect()
-            });
-            let part = match only {
-                AccuracyPart::All => Part::All,
-                AccuracyPart::Convergence => Part::Convergence,
-                AccuracyPart::Atlas => Part::Atlas,
-                AccuracyPart::Shatter => Part::Shatter,
-            };
-            let simulates_on_gpu = !redraw && matches!(part, Part::All | Part::Shatter);
-            let gpu = simulates_on_gpu
-                .then(|| GpuContext::new(cli.backend))
-                .transpose()?;
-            let opts = AccuracyOptions {
-                part,
-                quick,
-                redraw,
-                gpu: gpu.as_ref(),
-                scenes: &scenes,
-                shatter_dx: shatter_dx.as_deref(),
-                shatter_mappings: shatter_mappings.as_deref(),
-                shatter_quarter,
-            };
-            splatter::study::run_accuracy(&opts, &out, &mut std::io::stderr())
-        }
     }
-}
-
-fn bench_suite(backend: Option<BackendChoice>, args: &SuiteArgs) -> Result<()> {
-    if !(args.scale > 0.0 && args.scale.is_finite()) {
-        bail!("--scale {}: expected a positive factor", args.scale);
-    }
-    let gpu = GpuContext::new(backend)?;
-    let opts = splatter::study::suite::SuiteOptions {
-        quick: args.quick,
-        scale: args.scale,
-        frames: args.frames.unwrap_or(if args.quick { 3 } else { 4 }).max(2),
-        width: args.width,
-        height: args.height,
-        sim_steps: 20,
-        repeat: if args.quick { 3 } else { 5 },
-        scenes: args.scenes.clone(),
-        p2g: args.p2g.map(|p| p.path().name().to_string()),
-    };
-    let out = args.out.join("data");
-    splatter::study::suite::run_suite(&gpu, &opts, &out, &mut std::io::stderr())?;
-    Ok(())
 }
 
 /// `splatter inspect`: the report (warnings on stderr), and with `--preview` an overview

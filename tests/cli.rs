@@ -1607,26 +1607,6 @@ fn damaged_glb_files_get_one_error_line_each() {
     }
 }
 
-/// A peer that is not built is one error line saying how to get it, before any of our own
-/// cases runs (which would take minutes).
-#[test]
-fn a_missing_peer_is_refused_before_the_benchmark_runs() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = splatter_env(
-        dir.path(),
-        &["bench", "sim", "--quick", "--peer", "slosh"],
-        &[("SLOSH_PEER", "/nonexistent/slosh-peer")],
-    );
-    let line = expect_error(&out);
-    assert_mentions(
-        &line,
-        &["--peer slosh", "/nonexistent/slosh-peer", "SLOSH_PEER"],
-    );
-    // Refused up front: not even the table's header was printed.
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(!stdout.contains("ms/step"), "{stdout}");
-}
-
 /// `bench sim --separation` steps the NACC case with two fields: its passes include the
 /// damage field, on the gather path.
 #[test]

@@ -11,7 +11,7 @@ step (the usual Taichi layout) and f32 throughout.
     pip install taichi==1.7.4
     python3 benches/peers/taichi_mpm.py --per-axis 27 --cells 64 --dt 1e-4 --steps 20
 
-`splatter bench sim --peer taichi` runs this script with the case's numbers and prints the
+`splatter-lab peer taichi` runs this script with the case's numbers and prints the
 ratio. The last line printed is `ms/step: <value>`.
 """
 

@@ -5,7 +5,7 @@ Each scene is scenes/watermelon_drop_nacc.json (Table A1's materials as read, rh
 flat table with friction 0.5, continuous return mapping) at one grid spacing, with one
 velocity field per node or two ("separation": "damage_gradient", method section 4.9), for
 the whole fruit or one quarter of it between two slip planes through its centre (the cut
-of `splatter bench accuracy --shatter-quarter`, study::shatter::cut_to_quarter). The
+of `splatter-lab accuracy --shatter-quarter`, splatter_lab::shatter::cut_to_quarter). The
 fruit's Gaussians stay as shipped (spacing 0.005): the particles follow dx, the picture
 does not need to.
 

@@ -13,7 +13,7 @@ Usage:
       renders into OUT_DIR/NAME/ and writes OUT_DIR/finer.json; prints the table as
       markdown. Defaults: 2 frames (frame 0 and one simulated frame), quality high,
       900 s per scene, every scene in scenes/. --scale S instead multiplies the scene's
-      dx and every spacing by S (as `bench suite --scale S`; quality standard); --p2g
+      dx and every spacing by S (as `splatter-lab suite --scale S`; quality standard); --p2g
       forces a P2G path (gather, atomic, fixed).
 
 The one-call check for a lent GPU (the suite's failures at the paper's resolution):

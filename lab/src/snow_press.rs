@@ -19,9 +19,9 @@
 
 use glam::DVec3;
 
-use super::driven::driven_step;
-use crate::sim::models::{PlasticLaw, Snow};
-use crate::sim::{
+use crate::driven::driven_step;
+use splatter::sim::models::{PlasticLaw, Snow};
+use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
 
@@ -103,7 +103,7 @@ pub struct PressResult {
 /// Runs the press (module docs).
 pub fn run(spec: &PressSpec) -> PressResult {
     let dx = spec.dx;
-    let band = f64::from(crate::sim::WALL_BAND - 1);
+    let band = f64::from(splatter::sim::WALL_BAND - 1);
     // Walls meet material (band − 1)Δx inside the box faces: the block fills that box.
     let lo_m = band * dx;
     let side = ((spec.size / dx).round() + 2.0 * band) * dx;

@@ -1,5 +1,5 @@
 //! Snow packed under load: a block of Stomakhin et al.'s reference snow in a frictionless
-//! box, pressed by a plate (`splatter::study::snow_press`, docs/notes/snow.md *Snow*).
+//! box, pressed by a plate (`splatter_lab::snow_press`, docs/notes/snow.md *Snow*).
 //!
 //! `cargo run --release --example snow_press [-- COMPRESSION [SPEED]]`
 //!
@@ -10,7 +10,7 @@
 //! pressure on the plate and Δt (which shrinks as the packed snow stiffens).
 
 use anyhow::{Context, Result};
-use splatter::study::snow_press::{run, PressSpec};
+use splatter_lab::snow_press::{run, PressSpec};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -2,8 +2,8 @@
 //! then the driven nodes' velocities set (a grip pulling a bar, a plate pressing a block),
 //! then G2P. The loading of the studies that deform a specimen at a prescribed speed.
 
-use crate::sim::cpu::{check, g2p, grid_update, p2g};
-use crate::sim::{Grid, Material, Particles, StepParams};
+use splatter::sim::cpu::{check, g2p, grid_update, p2g};
+use splatter::sim::{Grid, Material, Particles, StepParams};
 
 /// Step `p` by `params.dt` on `grid`, `drive` setting the driven nodes' velocities after
 /// the grid update (gravity and the boundaries as `params` says). Whether every particle

@@ -1,12 +1,12 @@
 //! PNG charts of the studies with `plotters` (bitmap backend into a buffer, encoded by the
-//! `image` crate the renderer already uses). Text: [`crate::output::text`].
+//! `image` crate the renderer already uses). Text: [`splatter::output::text`].
 
 use std::path::Path;
 
 use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 
-use crate::output::text::register_font;
+use splatter::output::text::register_font;
 
 /// A colour per series index (colour-blind friendly Tableau-like palette).
 pub fn palette(i: usize) -> RGBColor {

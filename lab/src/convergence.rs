@@ -26,12 +26,12 @@ use std::f64::consts::PI;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-use super::runner::{seconds_per_frame, simulate, Outcome};
-use crate::sim::{
+use crate::runner::{seconds_per_frame, simulate, Outcome};
+use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
 };
-use crate::sim::{Case3Variant, NaccParams};
+use splatter::sim::{Case3Variant, NaccParams};
 
 /// One run of a sweep.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -143,7 +143,7 @@ pub fn fit_orders(runs: &[ConvRun]) -> Vec<OrderFit> {
                 .collect();
             let h: Vec<f64> = sel.iter().map(|r| r.dx).collect();
             let e: Vec<f64> = sel.iter().map(|r| r.error.unwrap_or(0.0)).collect();
-            let (order, constant) = super::fit::convergence_order(&h, &e)?;
+            let (order, constant) = crate::fit::convergence_order(&h, &e)?;
             Some(OrderFit {
                 case: case.to_string(),
                 order,
@@ -230,7 +230,7 @@ pub fn bar(cells: u32, cfl: f64, ppc_axis: u32, sweep: &str) -> ConvRun {
             us.push(end.iter().map(|&q| p.x[q].x - x0[q].x).sum::<f64>() / end.len() as f64);
         },
     );
-    let measured = super::fit::period_from_crossings(&super::fit::zero_crossings(&ts, &us));
+    let measured = crate::fit::period_from_crossings(&crate::fit::zero_crossings(&ts, &us));
     finish(
         ("bar", sweep),
         (dx, dt, cfl, ppc_axis),
@@ -248,7 +248,7 @@ fn finish(
     (particles, steps): (usize, usize),
     measured: Option<f64>,
     exact: Option<f64>,
-    stats: super::runner::RunStats,
+    stats: crate::runner::RunStats,
 ) -> ConvRun {
     let error = match (measured, exact) {
         (Some(m), Some(x)) => Some((m / x - 1.0).abs()),
@@ -393,7 +393,7 @@ fn cantilever(cells: u32, cfl: f64, ppc_axis: u32, sweep: &str) -> ConvRun {
 /// The fracture scene, as `scenes/fracture.json` (E 2000, ν 0.4, α₀ −0.01, β 1, ξ 2,
 /// M 2.36, `continuous` k = 2, ρ 2, 12 m/s onto a sticky ground; radius 0.1 instead of
 /// 0.12); the particles at t = 0.03 s (about 0.025 s after impact).
-fn fracture_run(dx: f64) -> (Particles, super::runner::RunStats, f64) {
+fn fracture_run(dx: f64) -> (Particles, crate::runner::RunStats, f64) {
     let material = Material::nacc(
         NaccParams {
             e: 2000.0,

@@ -1,5 +1,5 @@
 //! A von Mises bar pulled past yield and released, and one pulled to half its yield strain,
-//! on the CPU reference step (`splatter::study::plastic_bar`, docs/notes/metal.md *Metal and
+//! on the CPU reference step (`splatter_lab::plastic_bar`, docs/notes/metal.md *Metal and
 //! plasticine*).
 //!
 //! `cargo run --release --example von_mises_bar [-- DX [HARDENING_PA]]`
@@ -10,7 +10,7 @@
 //! at zero load and after release against the analytic ε_peak − τ_peak/E.
 
 use anyhow::{Context, Result};
-use splatter::study::plastic_bar::{run, BarResult, BarSpec, Phase};
+use splatter_lab::plastic_bar::{run, BarResult, BarSpec, Phase};
 
 fn report(name: &str, spec: &BarSpec, r: &BarResult, wall: f64) {
     println!(

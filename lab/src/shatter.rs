@@ -17,8 +17,8 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use crate::run::{one_line, Event, Input, Run, RunOptions};
-use crate::sim::nacc::ReturnMapping;
+use splatter::run::{one_line, Event, Input, Run, RunOptions};
+use splatter::sim::nacc::ReturnMapping;
 
 /// Grid spacings of the full study (metres), coarse to fine, and of `--quick`.
 pub const DX_FULL: [f64; 3] = [0.03, 0.02, 0.015];
@@ -93,7 +93,7 @@ pub enum ShatterEvent<'a> {
 /// `stills/shatter_mappings.png`. Quarter runs keep no still: the rest of the fruit stays
 /// in the picture, unsimulated, and would hide the quarter.
 pub fn run_shatter(
-    gpu: &crate::gpu::GpuContext,
+    gpu: &splatter::gpu::GpuContext,
     (scenes, stills): (&Path, &Path),
     plan: &ShatterPlan,
     on_event: &mut dyn FnMut(ShatterEvent),
@@ -221,7 +221,7 @@ fn side_by_side(pair: &[PathBuf; 2], out: &Path) -> Result<()> {
 }
 
 fn run_one(
-    gpu: &crate::gpu::GpuContext,
+    gpu: &splatter::gpu::GpuContext,
     (scene, value): (&Path, &Value),
     (dx, mapping): (f64, ReturnMapping),
     frames: u32,
@@ -234,7 +234,7 @@ fn run_one(
     v["simulation"]["dx"] = dx.into();
     set_mapping(&mut v, mapping);
     let base = scene.parent().unwrap_or(Path::new("."));
-    super::suite::prepare_scene(&mut v, 1.0, base);
+    crate::suite::prepare_scene(&mut v, 1.0, base);
     let scene_file = tmp.join("scene.json");
     std::fs::write(&scene_file, serde_json::to_string(&v)?)?;
     let out: PathBuf = tmp.join("frames");

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use glam::DVec3;
 
-use crate::sim::cpu::{check, step};
-use crate::sim::{Grid, Material, Particles, StepParams};
+use splatter::sim::cpu::{check, step};
+use splatter::sim::{Grid, Material, Particles, StepParams};
 
 /// How a run ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

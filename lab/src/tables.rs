@@ -7,11 +7,11 @@ use anyhow::Result;
 use plotters::prelude::SeriesLabelPosition;
 use plotters::style::RGBColor;
 
-use super::atlas::{AtlasReport, Class};
-use super::chart::{cell_map, lines, loglog, Cell, Series};
-use super::convergence::{ConvRun, ConvergenceReport};
-use super::fit::pareto_front;
-use super::shatter::{ShatterReport, ShatterRun};
+use crate::atlas::{AtlasReport, Class};
+use crate::chart::{cell_map, lines, loglog, Cell, Series};
+use crate::convergence::{ConvRun, ConvergenceReport};
+use crate::fit::pareto_front;
+use crate::shatter::{ShatterReport, ShatterRun};
 
 fn opt(v: Option<f64>) -> String {
     v.map_or("–".into(), |x| format!("{x:.4e}"))
@@ -196,7 +196,7 @@ fn find<'a>(
     sweep: &str,
     value: f64,
     variant: &str,
-) -> Option<&'a super::atlas::AtlasRun> {
+) -> Option<&'a crate::atlas::AtlasRun> {
     r.runs
         .iter()
         .find(|x| x.sweep == sweep && x.value == value && x.variant == variant)
@@ -313,7 +313,7 @@ pub fn shatter_chart(r: &ShatterReport, path: &Path) -> Result<()> {
     ];
     let mut series = Vec::new();
     for quarter in [false, true] {
-        for (m, mapping) in super::shatter::MAPPINGS.iter().enumerate() {
+        for (m, mapping) in crate::shatter::MAPPINGS.iter().enumerate() {
             let runs: Vec<&ShatterRun> = r
                 .runs
                 .iter()
@@ -350,9 +350,9 @@ pub fn shatter_chart(r: &ShatterReport, path: &Path) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::atlas::{AtlasRun, TipProbe};
-    use super::super::runner::Outcome;
     use super::*;
+    use crate::atlas::{AtlasRun, TipProbe};
+    use crate::runner::Outcome;
 
     /// The atlas table shows each run's class and numbers as stored in the JSON.
     #[test]

@@ -1,6 +1,6 @@
 //! A bar pulled past yield (von Mises, `sim::models::VonMises`) on the CPU reference step
 //! (f64): the validation of docs/notes/metal.md, *Metal and plasticine: a bar pulled past
-//! yield*, shared by `examples/von_mises_bar.rs` and `tests/plastic_bar.rs`.
+//! yield*, shared by `lab/examples/von_mises_bar.rs` and `lab/tests/plastic_bar.rs`.
 //!
 //! The bar lies along x between two grips: the nodes at or beyond each end of the gauge
 //! length L get a prescribed velocity ±v(t) (all three components, so the grips also hold
@@ -35,9 +35,9 @@
 
 use glam::{DMat3, DVec3, UVec3};
 
-use super::driven::driven_step;
-use crate::sim::models::VonMises;
-use crate::sim::{
+use crate::driven::driven_step;
+use splatter::sim::models::VonMises;
+use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
 

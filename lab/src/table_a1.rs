@@ -2,12 +2,12 @@
 //! material of every example, with c = sqrt((λ + 2μ)/ρ), under the literal reading of its
 //! density column (ρ = 2) and under the reading this project uses (ρ = 200, the density
 //! convention of the PhysGaussian code the paper's examples are set up in). The reasoning is
-//! in docs/method.md §9.2; `bench accuracy` writes the table to `OUT/data/table_a1.md`.
+//! in docs/method.md §9.2; `splatter-lab accuracy` writes the table to `OUT/data/table_a1.md`.
 
 use serde::{Deserialize, Serialize};
 
-use super::suite::PAPER_EXAMPLES;
-use crate::sim::elasticity::Lame;
+use crate::suite::PAPER_EXAMPLES;
+use splatter::sim::elasticity::Lame;
 
 /// The density column as printed: "2" in every row.
 pub const DENSITY_LITERAL: f64 = 2.0;

@@ -1,14 +1,17 @@
-//! Speed against accuracy: `splatter bench suite` ([`suite`]) and
-//! `splatter bench accuracy` — the convergence study ([`convergence`]) and the stability
-//! atlas ([`atlas`]), written as JSON (`OUT/data/`), markdown tables next to it and PNG
-//! charts (`OUT/images/`). The charts and tables are drawn from the JSON as written and
-//! read back, so their numbers are the JSON's.
+//! The lab: what the project measures about itself, kept out of the product. The
+//! paper-examples suite ([`suite`]), the accuracy studies — the convergence study
+//! ([`convergence`]), the stability atlas ([`atlas`]), the shatter study ([`shatter`]) —
+//! and the peers' drivers ([`peer`]), run by the `splatter-lab` binary. Studies write JSON
+//! (`OUT/data/`), markdown tables next to it and PNG charts (`OUT/images/`); the charts and
+//! tables are drawn from the JSON as written and read back, so their numbers are the
+//! JSON's.
 
 pub mod atlas;
 pub mod chart;
 pub mod convergence;
 pub mod driven;
 pub mod fit;
+pub mod peer;
 pub mod plastic_bar;
 pub mod runner;
 pub mod shatter;
@@ -24,7 +27,7 @@ use std::time::Instant;
 use anyhow::Result;
 use serde::{de::DeserializeOwned, Serialize};
 
-/// What `bench accuracy` runs.
+/// What `splatter-lab accuracy` runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Part {
     All,
@@ -39,18 +42,18 @@ impl Part {
     }
 }
 
-/// What `bench accuracy` is given: the part, the sizes, and for the shatter study the
+/// What `splatter-lab accuracy` is given: the part, the sizes, and for the shatter study the
 /// adapter and the directory of the shipped scenes.
 pub struct AccuracyOptions<'a> {
     pub part: Part,
     pub quick: bool,
     pub redraw: bool,
-    pub gpu: Option<&'a crate::gpu::GpuContext>,
+    pub gpu: Option<&'a splatter::gpu::GpuContext>,
     pub scenes: &'a Path,
     /// The shatter study's grid spacings, if not its defaults.
     pub shatter_dx: Option<&'a [f64]>,
     /// The shatter study's return mappings, if not both.
-    pub shatter_mappings: Option<&'a [crate::sim::nacc::ReturnMapping]>,
+    pub shatter_mappings: Option<&'a [splatter::sim::nacc::ReturnMapping]>,
     /// The shatter study simulates one quarter of the fruit (`shatter::cut_to_quarter`).
     pub shatter_quarter: bool,
 }

@@ -1,4 +1,4 @@
-//! `splatter bench suite`: the simulation, render and end-to-end benchmarks in one run,
+//! `splatter-lab suite`: the simulation, render and end-to-end benchmarks in one run,
 //! written as JSON and as a markdown table next to the paper's seconds per frame
 //! (docs/method.md §9), with the adapter, the machine's cores and the command line.
 //!
@@ -16,12 +16,12 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::bench::{sim_paths, synthetic_splats, time_render, time_sim, SimCase};
-use crate::bench::{RenderTiming, SimTiming};
-use crate::gpu::GpuContext;
-use crate::output::manifest::Manifest;
-use crate::render::{Camera, GpuRenderer};
-use crate::run::{one_line, Input, Run, RunOptions};
+use splatter::bench::{sim_paths, synthetic_splats, time_render, time_sim, SimCase};
+use splatter::bench::{RenderTiming, SimTiming};
+use splatter::gpu::GpuContext;
+use splatter::output::manifest::Manifest;
+use splatter::render::{Camera, GpuRenderer};
+use splatter::run::{one_line, Input, Run, RunOptions};
 
 /// One row of docs/method.md §9's table: what the paper reports for an example.
 #[derive(Clone, Copy, Debug)]
@@ -70,7 +70,7 @@ const fn ex(
 /// Our own simulated demo scenes, timed after the paper's examples.
 pub const EXTRA_SCENES: [&str; 3] = ["fracture", "pillow", "table"];
 
-/// Options of `bench suite`.
+/// Options of `splatter-lab suite`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SuiteOptions {
     /// Small cases only (no 1M-particle sim or 1M-Gaussian render case), fewer frames.
@@ -129,7 +129,7 @@ pub struct EndToEndRun {
     pub p2g: Option<String>,
 }
 
-/// Everything `bench suite` measured.
+/// Everything `splatter-lab suite` measured.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SuiteReport {
     pub command: String,
@@ -322,7 +322,7 @@ fn run_render(gpu: &GpuContext, scene: &Path, opts: &SuiteOptions) -> Result<End
         p2g: opts
             .p2g
             .as_deref()
-            .and_then(crate::sim::gpu::P2gPath::from_name),
+            .and_then(splatter::sim::gpu::P2gPath::from_name),
         ..RunOptions::default()
     };
     let start = Instant::now();
@@ -492,7 +492,7 @@ mod tests {
 
     fn report() -> SuiteReport {
         SuiteReport {
-            command: "splatter bench suite".into(),
+            command: "splatter-lab suite".into(),
             adapter: "test".into(),
             cores: 2,
             load_average: Some([1.0, 2.0, 3.0]),

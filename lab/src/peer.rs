@@ -1,13 +1,13 @@
-//! Peers of `bench sim --peer`: other MPM codes stepped on the same case in the same run,
+//! Peers of `splatter-lab peer`: other MPM codes stepped on the same case in the same run,
 //! each through its program in `benches/peers/` (a Python script, or a standalone cargo
 //! project built beforehand). Each takes the same arguments and prints a line starting
 //! with its name and a last line `ms/step: <value>`.
 
 use anyhow::Result;
 
-use super::SimCase;
+use splatter::bench::SimCase;
 
-/// Another MPM code that `bench sim --peer` runs on the same case in the same run.
+/// Another MPM code that `splatter-lab peer` runs on the same case in the same run.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Peer {
     /// Taichi on the CPU (`benches/peers/taichi_mpm.py`; `pip install taichi==1.7.4`).
@@ -20,14 +20,14 @@ pub enum Peer {
 
 /// What a peer printed: its description line, its milliseconds per step, and its
 /// per-pass lines (`pass NAME: MS ms/step`) when it times passes.
-pub(super) struct PeerRun {
+pub struct PeerRun {
     pub line: String,
     pub ms: f64,
     pub passes: Vec<String>,
 }
 
 impl Peer {
-    pub(super) fn name(self) -> &'static str {
+    pub fn name(self) -> &'static str {
         match self {
             Peer::Taichi => "taichi",
             Peer::Slosh => "slosh",
@@ -75,11 +75,11 @@ impl Peer {
 
     /// The peer's program, or an error saying how to get it (checked before our own cases
     /// run, so that a missing peer costs no minutes).
-    pub(super) fn check(self) -> Result<std::path::PathBuf> {
+    pub fn check(self) -> Result<std::path::PathBuf> {
         let (script, how) = self.program();
         if !script.is_file() {
             anyhow::bail!(
-                "--peer {}: {} not found ({how})",
+                "peer {}: {} not found ({how})",
                 self.name(),
                 script.display()
             );
@@ -88,7 +88,7 @@ impl Peer {
     }
 
     /// Step `case` (a fixed-corotated cube) `steps` times in the peer.
-    pub(super) fn run(self, case: &SimCase, steps: u32) -> Result<PeerRun> {
+    pub fn run(self, case: &SimCase, steps: u32) -> Result<PeerRun> {
         let script = self.check()?;
         let p = &case.particles;
         let per_axis = (p.len() as f64).cbrt().round() as usize;
@@ -117,18 +117,14 @@ impl Peer {
         ]
         .into();
         let output = self.command(&script).args(&args).output().map_err(|e| {
-            anyhow::anyhow!(
-                "--peer {}: cannot run {}: {e}",
-                self.name(),
-                script.display()
-            )
+            anyhow::anyhow!("peer {}: cannot run {}: {e}", self.name(), script.display())
         })?;
         let stdout = String::from_utf8_lossy(&output.stdout);
         let stderr = String::from_utf8_lossy(&output.stderr);
         if !output.status.success() {
             let last = stderr.lines().last().unwrap_or("no message");
             anyhow::bail!(
-                "--peer {}: {} failed: {last} ({})",
+                "peer {}: {} failed: {last} ({})",
                 self.name(),
                 script.display(),
                 self.needs()
@@ -140,7 +136,7 @@ impl Peer {
             .and_then(|v| v.trim().parse::<f64>().ok())
             .ok_or_else(|| {
                 anyhow::anyhow!(
-                    "--peer {}: no `ms/step:` line in its output: {stdout}",
+                    "peer {}: no `ms/step:` line in its output: {stdout}",
                     self.name()
                 )
             })?;

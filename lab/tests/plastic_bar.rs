@@ -1,5 +1,5 @@
 //! Von Mises plasticity in a bar pulled past yield on the CPU reference step
-//! (`splatter::study::plastic_bar`; the full-size figures are in docs/notes/metal.md, *Metal and
+//! (`splatter_lab::plastic_bar`; the full-size figures are in docs/notes/metal.md, *Metal and
 //! plasticine*). A coarse bar (Δx 0.01, 4 cells across) keeps the test short: the
 //! loading is a uniform stretch, so the answer does not depend on Δx (at Δx 0.005 and 0.01
 //! the fitted yield stress is within 0.01% of σ_y, the elastic slope within 0.2% of E).
@@ -9,7 +9,7 @@
 //! analytic ε_peak − τ_peak/E; below yield no particle of the gauge may yield and the bar
 //! must return to within 10⁻⁴ of its length (0.2% of the peak strain there).
 
-use splatter::study::plastic_bar::{run, BarSpec};
+use splatter_lab::plastic_bar::{run, BarSpec};
 
 fn coarse() -> BarSpec {
     BarSpec {

@@ -15,11 +15,11 @@
 use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
-use super::runner::{simulate, Outcome};
-use crate::sim::nacc::{project_pq, ReturnCase};
-use crate::sim::ElasticModel;
-use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
-use crate::sim::{return_map, Case3Variant, NaccParams};
+use crate::runner::{simulate, Outcome};
+use splatter::sim::nacc::{project_pq, ReturnCase};
+use splatter::sim::ElasticModel;
+use splatter::sim::{cfl_dt, Grid, Material, Particles, StepParams};
+use splatter::sim::{return_map, Case3Variant, NaccParams};
 
 /// Trial pressure fraction (p_tr − p_c)/L_p above which a case-3 return is "near the
 /// right tip".
@@ -410,7 +410,7 @@ fn tip_probe(name: &str, variant: Case3Variant) -> TipProbe {
 }
 
 /// An ellipse with β = 1, M = 2.36 (p0 = 1: the probe is scale free).
-const BASELINE_ELLIPSE: crate::sim::YieldEllipse = crate::sim::YieldEllipse {
+const BASELINE_ELLIPSE: splatter::sim::YieldEllipse = splatter::sim::YieldEllipse {
     p0: 1.0,
     beta: 1.0,
     m_slope: 2.36,
