@@ -648,7 +648,7 @@ impl SimCase {
 
     /// About `n` particles of `model` on a `cells`³ grid.
     pub fn with_model(n: usize, cells: u32, model: SimModel) -> SimCase {
-        use crate::sim::nacc::{Case3Variant, NaccParams};
+        use crate::sim::models::nacc::oracle::{Case3Variant, NaccParams};
         use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
         use glam::DVec3;
         let material = match model {

@@ -10,7 +10,7 @@ use splatter::gpu::pages::Pages;
 use splatter::gpu::GpuContext;
 use splatter::sim::cpu::step;
 use splatter::sim::gpu::{GpuSim, P2gPath};
-use splatter::sim::nacc::Case3Variant;
+use splatter::sim::models::nacc::oracle::Case3Variant;
 use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,

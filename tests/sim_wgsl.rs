@@ -3,7 +3,8 @@
 //! adapter and on the GL backend (lavapipe and llvmpipe on a machine without a GPU).
 //!
 //! Each function under test gets a compute shader: the simulation modules
-//! ([`wgsl::library`]) plus `shaders/common.wgsl` plus a small `@compute fn main` that
+//! ([`wgsl::library`]; for a law's functions, the registry's WGSL [`splatter::sim::models::wgsl`] in
+//! `extra`) plus `shaders/common.wgsl` plus a small `@compute fn main` that
 //! reads one input record per invocation from a flat `array<f32>` and writes one output
 //! record. Inputs are drawn with [`SplitMix64`] in f64, rounded to f32 for the GPU, and the
 //! oracle runs on exactly those rounded values (converted back to f64), so every difference
@@ -20,12 +21,13 @@ use splatter::render::gpu::read_buffer;
 use splatter::rng::SplitMix64;
 use splatter::sim::bspline::{stencil_offsets, Stencil};
 use splatter::sim::elasticity::{kirchhoff_fixed_corotated, kirchhoff_neo_hookean, Lame};
-use splatter::sim::nacc::{
+use splatter::sim::models::nacc::oracle::{
     j_from_pressure, principal_state, project_pq, return_map, stretches_from_pq, Case3Variant,
     NaccParams, PlasticReturn, PrincipalState, ReturnCase, YieldEllipse, SIGMA_MIN,
 };
+use splatter::sim::models::nacc::{self as nacc_model, NaccMaterialGpu};
 use splatter::sim::svd::{polar, svd3};
-use splatter::sim::wgsl::{self, NaccMaterialGpu};
+use splatter::sim::wgsl;
 use wgpu::util::DeviceExt;
 
 const COMMON: &str = include_str!("../shaders/common.wgsl");
@@ -828,7 +830,10 @@ fn nacc_return_map_matches_the_oracle() {
             return_map(*f, *alpha, &params, VARIANTS[*vi])
         })
         .collect();
-    let extra = "@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;";
+    let extra = format!(
+        "{}\n@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;",
+        splatter::sim::models::wgsl()
+    );
     let body = "
     let out = nacc_return_map(in_mat3(ib), in1(ib + 9u), materials[u32(in1(ib + 10u))]);
     out_mat3(ob, out.f);
@@ -838,7 +843,7 @@ fn nacc_return_map_matches_the_oracle() {
     out1(ob + 12u, out.q_trial);
     out1(ob + 13u, out.p);
     out1(ob + 14u, out.q);";
-    let src = harness(11, 15, extra, body);
+    let src = harness(11, 15, &extra, body);
     for gpu in gpus() {
         let t = Instant::now();
         let out = run(
@@ -872,7 +877,7 @@ fn nacc_return_map_matches_the_oracle() {
                 let ell = params.ellipse(*alpha);
                 let got_f = mat_at(&out, o);
                 let got_alpha = out[o + 9] as f64;
-                let got_case = wgsl::return_case(out[o + 10] as u32).expect("case code");
+                let got_case = nacc_model::return_case(out[o + 10] as u32).expect("case code");
                 let (p_tr, q_tr, p, q) = (
                     out[o + 11] as f64,
                     out[o + 12] as f64,
@@ -1017,7 +1022,10 @@ fn nacc_p0_matches_the_oracle() {
         };
         flat.extend([alpha as f32, (i % materials.len()) as f32]);
     }
-    let extra = "@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;";
+    let extra = format!(
+        "{}\n@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;",
+        splatter::sim::models::wgsl()
+    );
     let body = "
     let alpha = in1(ib);
     let mat = materials[u32(in1(ib + 1u))];
@@ -1025,7 +1033,7 @@ fn nacc_p0_matches_the_oracle() {
     out1(ob, nacc_p0(alpha, mat));
     out1(ob + 1u, sim_sinh(arg));
     out1(ob + 2u, sinh(arg));";
-    let src = harness(2, 3, extra, body);
+    let src = harness(2, 3, &extra, body);
     for gpu in gpus() {
         let out = run(
             gpu,

@@ -11,7 +11,7 @@
 
 use super::boundary::BoundaryKind;
 use super::kinematic::ColliderShape;
-use super::nacc::{Case3Variant, ReturnCase, ReturnMapping};
+use super::models::nacc::oracle::{Case3Variant, ReturnCase, ReturnMapping};
 
 /// Materials a simulation may have (the GPU step's constant table).
 pub const MAX_MATERIALS: usize = 16;
@@ -142,7 +142,7 @@ impl ReturnCase {
 }
 
 /// The watchdog's counters: one `atomic<u32>` word each in the `flags` buffer that the
-/// step passes write and [`super::GpuSim::take_watchdog`] reads once a frame (WGSL
+/// step passes write and [`super::gpu::GpuSim::take_watchdog`] reads once a frame (WGSL
 /// `WATCH_*`, the array's length `WATCH_SLOTS`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WatchSlot {
@@ -206,7 +206,7 @@ impl WatchSlot {
     }
 }
 
-/// The constants the material modules read (`shaders/sim/nacc.wgsl`), name and value.
+/// The constants the material modules read (`shaders/sim/models/nacc.wgsl`), name and value.
 pub fn material_constants() -> Vec<(&'static str, u32)> {
     let variants = ReturnMapping::ALL
         .iter()
@@ -262,8 +262,8 @@ mod tests {
     use super::*;
     use crate::sim::boundary::Condition;
     use crate::sim::kinematic::{KinematicCollider, RigidMotion};
+    use crate::sim::models::nacc::NaccMaterialGpu;
     use crate::sim::step::layout::{GpuCondition, GpuKinematic, GpuMaterial};
-    use crate::sim::wgsl::NaccMaterialGpu;
     use crate::sim::Material;
     use wgpu::naga;
 
@@ -312,7 +312,7 @@ mod tests {
             let record = GpuKinematic::from_cpu(&k);
             assert_eq!(record.shape, step_constant(shape.wgsl_name()), "{shape:?}");
         }
-        let params = crate::sim::nacc::NaccParams {
+        let params = crate::sim::models::nacc::oracle::NaccParams {
             e: 2000.0,
             nu: 0.38,
             alpha0: -0.04,
@@ -371,7 +371,7 @@ mod tests {
             assert_eq!(unique.len(), codes.len(), "codes {codes:?}");
         }
         let shaders = [
-            include_str!("../../shaders/sim/nacc.wgsl"),
+            include_str!("../../shaders/sim/models/nacc.wgsl"),
             include_str!("../../shaders/sim/step/common.wgsl"),
             include_str!("../../shaders/sim/material.wgsl"),
         ];

@@ -7,8 +7,8 @@
 use glam::DMat3;
 
 use super::elasticity::Lame;
+use super::models::nacc::oracle::{Case3Variant, NaccParams};
 use super::models::{ElasticModel, Nacc, Plastic, PlasticLaw, PlasticModel};
-use super::nacc::{Case3Variant, NaccParams};
 
 /// A material: the elastic model of the stress with its Lamé parameters, and the plastic
 /// model after the F update.

@@ -21,7 +21,7 @@
 mod brittle;
 mod drucker_prager;
 mod fixed_corotated;
-mod nacc;
+pub mod nacc;
 mod neo_hookean;
 mod snow;
 mod stvk_hencky;
@@ -533,10 +533,18 @@ pub fn wgsl_for(used: &ModelsUsed) -> String {
         out += &format!("const PLASTIC_{name}: u32 = {}u;\n", m.code());
     }
     out += "\nstruct PlasticState {\n    f: mat3x3<f32>,\n    alpha: f32,\n}\n\n";
-    for def in ELASTIC_MODELS {
-        out += def.wgsl_module;
+    // Only the used models' functions: a law's WGSL (NACC's is 300 lines) costs every pass
+    // its compile time when no material of the simulation reaches it.
+    let elastic_needed = |m: &ElasticModel| {
+        used.elastic.contains(m) || used.plastic.iter().any(|p| p.elastic() == Some(*m))
+    };
+    for m in ElasticModel::ALL.iter().filter(|m| elastic_needed(m)) {
+        out += m.def().wgsl_module;
     }
-    for m in PlasticModel::ALL {
+    for m in PlasticModel::ALL
+        .iter()
+        .filter(|m| used.plastic.contains(m))
+    {
         out += m.wgsl().module;
     }
     out += "// Kirchhoff stress of material m's elastic model at F = f.\n";
@@ -615,8 +623,8 @@ mod tests {
         }
     }
 
-    /// A simulation's passes dispatch on its own models only, and the library still
-    /// validates with the other cases left out.
+    /// A simulation's passes dispatch on its own models only and hold only their WGSL, and
+    /// the library still validates with the others left out.
     #[test]
     fn a_simulation_dispatches_only_its_models() {
         let used = ModelsUsed::of(&[
@@ -630,6 +638,12 @@ mod tests {
         assert!(src.contains("case ELASTIC_FIXED_COROTATED"));
         assert!(!src.contains("case ELASTIC_NEO_HOOKEAN"));
         assert!(!src.contains("case PLASTIC_NACC"));
+        // Nor are the other laws' functions compiled in; a NACC material brings its own.
+        assert!(!src.contains("fn nacc_return_map("));
+        assert!(!src.contains("fn brittle_"));
+        let (law, _) = PlasticModel::Nacc.example(2000.0, 0.3).unwrap();
+        let nacc = ModelsUsed::of(&[super::super::Material::with_plastic(law, 2000.0, 0.3)]);
+        assert!(wgsl_for(&nacc).contains("fn nacc_return_map("));
         let all = wgsl();
         for m in ElasticModel::ALL {
             assert!(all.contains(&format!("case ELASTIC_{}", m.def().name.to_uppercase())));

@@ -1,15 +1,21 @@
 //! NACC plasticity (docs/method.md §4): Non-Associated Cam-Clay with hardening on
-//! Neo-Hookean, the fruit, bread and sand of CD-MPM. Oracle `sim::nacc::return_map`, WGSL
-//! `nacc_return_map` in `shaders/sim/nacc.wgsl`.
+//! Neo-Hookean, the fruit, bread and sand of CD-MPM. Its parameters and registry line here,
+//! the f64 oracle in [`oracle`], the f32 twin (`nacc_return_map` and its helpers) in
+//! `shaders/sim/models/nacc.wgsl`, compiled only into simulations that use the law.
 
 use glam::DMat3;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+use bytemuck::{Pod, Zeroable};
+
 use super::{ElasticModel, Example, ParamError, PlasticLaw, PlasticWgsl, PLASTIC_PARAMS};
 use crate::sim::elasticity::Lame;
-use crate::sim::nacc::{
-    m_from_friction_angle, return_map, Case3Variant, NaccParams, ReturnMapping,
+
+pub mod oracle;
+pub use oracle::{
+    m_from_friction_angle, project_pq, return_map, Case3Variant, NaccParams, PlasticReturn,
+    ReturnCase, ReturnMapping, YieldEllipse,
 };
 
 /// NACC's parameters and its case-3 return mapping.
@@ -64,7 +70,7 @@ impl PlasticLaw for Nacc {
         damage: "nacc_damage(m.params[5], alpha)",
         stress_scale: "1.0",
         kirchhoff: None,
-        module: include_str!("../../../shaders/sim/models/nacc.wgsl"),
+        module: WGSL_MODULE,
     };
     const EXAMPLE: Example = Example {
         params: r#"{"alpha0": -0.04, "beta": 1.0, "xi": 2.0, "M": 2.36, "return_mapping": "continuous", "k": 2.0}"#,
@@ -164,5 +170,96 @@ impl PlasticLaw for Nacc {
             0.0,
             0.0,
         ]
+    }
+}
+
+/// The law's WGSL: `NaccMaterial`, `nacc_return_map` and its helpers, `nacc_material` and
+/// `nacc_damage`. Needs the simulation's library (`sim::wgsl::library`) and, for
+/// `nacc_material`, `SimMaterial` (`sim::models::wgsl`).
+pub const WGSL_MODULE: &str = include_str!("../../../../shaders/sim/models/nacc.wgsl");
+
+/// The WGSL `NaccMaterial` (32 bytes), as the tests hand it to `nacc_return_map`
+/// directly: κ and μ computed here in f64, then rounded.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct NaccMaterialGpu {
+    pub kappa: f32,
+    pub mu: f32,
+    pub beta: f32,
+    pub xi: f32,
+    pub m_slope: f32,
+    /// Exponent of the `continuous` variant (0 for the others).
+    pub k: f32,
+    /// `NACC_VARIANT_*` ([`Case3Variant::gpu_code`]).
+    pub variant: u32,
+    /// Initial hardening state α₀ (a particle's damage, `Material::damage`).
+    pub alpha0: f32,
+}
+
+impl NaccMaterialGpu {
+    pub fn new(params: &NaccParams, variant: Case3Variant) -> Self {
+        let k = match variant {
+            Case3Variant::Continuous { k } => k,
+            Case3Variant::Center | Case3Variant::ClosestPoint => 0.0,
+        };
+        NaccMaterialGpu {
+            kappa: params.kappa() as f32,
+            mu: params.mu() as f32,
+            beta: params.beta as f32,
+            xi: params.xi as f32,
+            m_slope: params.m_slope as f32,
+            k: k as f32,
+            variant: variant.gpu_code(),
+            alpha0: params.alpha0 as f32,
+        }
+    }
+}
+
+/// The [`ReturnCase`] of a WGSL `NACC_*` case code.
+pub fn return_case(code: u32) -> Option<ReturnCase> {
+    ReturnCase::from_gpu_code(code)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use wgpu::naga;
+
+    /// The Rust mirror of `NaccMaterial` has the WGSL layout, read by naga from the law's
+    /// module after the library and the registry's WGSL.
+    #[test]
+    fn material_layout_matches_the_wgsl() {
+        let src = format!(
+            "{}\n{}",
+            crate::sim::wgsl::library(),
+            crate::sim::models::wgsl()
+        );
+        let module = crate::gpu::layout_check::validated_module(&src);
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("layout");
+        let ty = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some("NaccMaterial"))
+            .expect("NaccMaterial");
+        let naga::TypeInner::Struct { members, span } = &ty.1.inner else {
+            panic!("not a struct");
+        };
+        assert_eq!(*span as usize, std::mem::size_of::<NaccMaterialGpu>());
+        let rust = [
+            ("kappa", std::mem::offset_of!(NaccMaterialGpu, kappa)),
+            ("mu", std::mem::offset_of!(NaccMaterialGpu, mu)),
+            ("beta", std::mem::offset_of!(NaccMaterialGpu, beta)),
+            ("xi", std::mem::offset_of!(NaccMaterialGpu, xi)),
+            ("m_slope", std::mem::offset_of!(NaccMaterialGpu, m_slope)),
+            ("k", std::mem::offset_of!(NaccMaterialGpu, k)),
+            ("variant", std::mem::offset_of!(NaccMaterialGpu, variant)),
+            ("alpha0", std::mem::offset_of!(NaccMaterialGpu, alpha0)),
+        ];
+        assert_eq!(members.len(), rust.len());
+        for (m, (name, off)) in members.iter().zip(rust) {
+            assert_eq!(m.name.as_deref(), Some(name));
+            assert_eq!(m.offset as usize, off, "{name}");
+        }
     }
 }
