@@ -388,24 +388,36 @@ pub fn sim_bench(
     Ok(small)
 }
 
-/// Which P2G path a long run on `gpu` takes by default, and the race's times where the
-/// adapter leaves the choice to one (`P2gRace`).
+/// Which P2G path a long run on `gpu` takes by default (as a run's [`SimPlan`] chooses
+/// it), and the race's times where the adapter leaves the choice to one.
+///
+/// [`SimPlan`]: crate::sim::gpu::SimPlan
 fn default_path_line(gpu: &GpuContext) -> Result<String> {
-    use crate::sim::gpu::{P2gPath, P2gRace};
+    use crate::sim::gpu::{SimPlan, SimRequest};
     let case = SimCase::new(20_000, 64);
-    if !P2gRace::decides(gpu, &case.params, case.particles.len()) {
-        return Ok(format!(
+    let plan = SimPlan::choose(
+        gpu,
+        &SimRequest {
+            params: &case.params,
+            particles: case.particles.len(),
+            cells: case.grid.cells,
+            steps: u64::MAX,
+            forced: None,
+            deterministic: false,
+        },
+    )?;
+    Ok(match plan.race {
+        None => format!(
             "default P2G here: {} (no race on this adapter)",
-            P2gPath::best(gpu).name()
-        ));
-    }
-    let race = P2gRace::on(gpu)?;
-    Ok(format!(
-        "default P2G of a long run here: {} (race: float atomics {:.2}, gather {:.2} ms a step of its probe block)",
-        race.winner().name(),
-        race.atomic_ms,
-        race.gather_ms
-    ))
+            plan.p2g.name()
+        ),
+        Some(race) => format!(
+            "default P2G of a long run here: {} (race: float atomics {:.2}, gather {:.2} ms a step of its probe block)",
+            plan.p2g.name(),
+            race.atomic_ms,
+            race.gather_ms
+        ),
+    })
 }
 
 /// What `bench sim` steps: `steps` per case, the 20k case only (`quick`), each case also

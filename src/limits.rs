@@ -2,57 +2,16 @@
 //! GPU, so that a scene too large for the adapter stops with one message saying what to
 //! reduce, instead of a validation error (or an out-of-memory abort) midway.
 //!
-//! The byte counts mirror the allocations of [`GpuSim`](crate::sim::gpu::GpuSim) and
-//! [`GpuRenderer`](crate::render::GpuRenderer). An array that its passes read in pages
+//! The byte counts here mirror the allocations of [`GpuRenderer`](crate::render::GpuRenderer)
+//! and of the derive pass; the simulation's are `sim::gpu::plan::sim_needs`, next to the
+//! path choice they depend on. An array that its passes read in pages
 //! ([`crate::gpu::pages`]) must fit one buffer (`max_buffer_size`); any other must fit one
 //! storage binding ([`GpuContext::max_binding`]).
 
-use crate::gpu::GpuContext;
-use glam::UVec3;
-
-/// What a buffer must fit in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Fit {
-    /// One storage binding: its passes bind it whole.
-    Binding,
-    /// One buffer: its passes bind it in pages.
-    Buffer,
-}
-
-impl Fit {
-    fn place(self) -> &'static str {
-        match self {
-            Fit::Binding => "one GPU storage binding",
-            Fit::Buffer => "one GPU buffer",
-        }
-    }
-}
-
-/// One buffer a run will allocate.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Need {
-    pub what: String,
-    pub bytes: u64,
-    pub advice: &'static str,
-    pub fit: Fit,
-}
-
-#[derive(Debug, thiserror::Error, PartialEq)]
-#[error("{what} needs {bytes} bytes ({mib:.1} MiB) in {place}, but {adapter} allows at most {limit} bytes ({limit_mib:.1} MiB); {advice}", mib = *bytes as f64 / 1048576.0, limit_mib = *limit as f64 / 1048576.0)]
-pub struct LimitError {
-    pub what: String,
-    pub place: &'static str,
-    pub bytes: u64,
-    pub limit: u64,
-    pub adapter: String,
-    pub advice: &'static str,
-}
+pub use crate::gpu::limits::{check, check_gpu, Fit, LimitError, Need};
 
 const FEWER_GAUSSIANS: &str = "render fewer Gaussians (a larger procedural spacing, a smaller or pruned PLY, fewer objects) or use a GPU with larger buffers";
-const FEWER_PARTICLES: &str = "simulate fewer particles (a larger physics.particles spacing, smaller or fewer objects with physics) or use a GPU with larger buffers";
 const FEWER_SIMULATED: &str = "simulate fewer Gaussians (a larger procedural spacing, physics.select or min_opacity to leave some static) or use a GPU with larger buffers";
-const SMALLER_GRID: &str =
-    "use a coarser or smaller grid (a larger simulation.dx, or a smaller simulation.domain)";
 const SMALLER_IMAGE: &str = "render a smaller image (--width/--height or output.width/height)";
 
 /// The renderer's largest buffers for `gaussians` Gaussians and a `width`×`height` image.
@@ -88,63 +47,6 @@ pub fn render_needs(gaussians: usize, width: u32, height: u32) -> Vec<Need> {
     ]
 }
 
-/// The simulation's largest buffers for `particles` particles on a grid of `cells` cells
-/// per axis ([`Grid::cells`](crate::sim::Grid)), on the gather P2G path when `gather`. The
-/// grid's nodes live in a pool of the blocks the particles reach (`GpuSim`), grown as they
-/// move and capped where it stops fitting (`GpuSim::max_pool_blocks`), so the whole grid
-/// needs only its block tables, 4 bytes a block of 4³ nodes; the gather path also indexes
-/// every cell (its runs of sorted particles) and binds the particle arrays whole; a
-/// captured surface collider (`surface`) samples its distance at every node.
-pub fn sim_needs(particles: usize, cells: UVec3, gather: bool, surface: bool) -> Vec<Need> {
-    let n = particles as u64;
-    let nodes = cells.to_array().map(|c| u64::from(c) + 1);
-    let blocks: u64 = nodes.iter().map(|n| n.div_ceil(4)).product();
-    let node_count: u64 = nodes.iter().product();
-    let mut needs = vec![
-        Need {
-            what: if gather {
-                format!("the stress-affine terms of {n} particles, which the gather P2G path (two-field separation) binds whole")
-            } else {
-                format!("the deformation gradients of {n} particles")
-            },
-            bytes: n * 48,
-            advice: FEWER_PARTICLES,
-            fit: if gather { Fit::Binding } else { Fit::Buffer },
-        },
-        Need {
-            what: format!(
-                "the block table of a grid of {}×{}×{} nodes",
-                cells.x + 1,
-                cells.y + 1,
-                cells.z + 1
-            ),
-            bytes: blocks * 4,
-            advice: SMALLER_GRID,
-            fit: Fit::Binding,
-        },
-    ];
-    if surface {
-        needs.push(Need {
-            what: format!("the captured surface's distance at {node_count} grid nodes"),
-            bytes: node_count * 4,
-            advice: SMALLER_GRID,
-            fit: Fit::Binding,
-        });
-    }
-    if gather {
-        needs.push(Need {
-            what: format!(
-                "the cell ranges of {} grid cells (gather P2G path)",
-                crate::sim::gpu::gather_range_entries(cells) - 1
-            ),
-            bytes: crate::sim::gpu::gather_range_entries(cells) * 8,
-            advice: SMALLER_GRID,
-            fit: Fit::Binding,
-        });
-    }
-    needs
-}
-
 /// The derive pass's buffers, which it binds whole: the rest records
 /// ([`RestGaussian`](crate::derive::RestGaussian): rest look and binding) of `gaussians`
 /// simulated Gaussians, the state of the `particles` they are bound to, and the records of
@@ -167,7 +69,7 @@ pub fn derive_needs(gaussians: usize, particles: usize, rendered: usize) -> Vec<
                 "the deformation gradients of {particles} particles, which the derive pass reads"
             ),
             bytes: particles as u64 * 48,
-            advice: FEWER_PARTICLES,
+            advice: crate::sim::gpu::plan::FEWER_PARTICLES,
             fit: Fit::Binding,
         },
         Need {
@@ -179,41 +81,11 @@ pub fn derive_needs(gaussians: usize, particles: usize, rendered: usize) -> Vec<
     ]
 }
 
-/// The first need above its limit (`binding` or `buffer` bytes), as an error naming
-/// `adapter`.
-pub fn check(needs: &[Need], binding: u64, buffer: u64, adapter: &str) -> Result<(), LimitError> {
-    for need in needs {
-        let limit = match need.fit {
-            Fit::Binding => binding.min(buffer),
-            Fit::Buffer => buffer,
-        };
-        if need.bytes > limit {
-            return Err(LimitError {
-                what: need.what.clone(),
-                place: need.fit.place(),
-                bytes: need.bytes,
-                limit,
-                adapter: adapter.to_owned(),
-                advice: need.advice,
-            });
-        }
-    }
-    Ok(())
-}
-
-/// [`check`] against `gpu`'s limits.
-pub fn check_gpu(gpu: &GpuContext, needs: &[Need]) -> Result<(), LimitError> {
-    check(
-        needs,
-        gpu.max_binding(),
-        gpu.limits.max_buffer_size,
-        &gpu.describe(),
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sim::gpu::plan::sim_needs;
+    use glam::UVec3;
 
     fn grid(cells: u32) -> UVec3 {
         UVec3::splat(cells)

@@ -768,3 +768,66 @@ fn p2g_race_times_both_paths_once_and_names_the_faster() {
         assert_eq!(P2gRace::on(gpu).unwrap(), race, "raced twice");
     }
 }
+
+/// The plan takes a forced path as given, never the float atomics for a deterministic
+/// run, the gather for two-field separation, and the race's winner only where the race
+/// decides and the run is long enough to pay for it; it refuses a forced atomic path with
+/// --deterministic, a grid past 2³² nodes and one whose block table exceeds the adapter.
+#[test]
+fn the_sim_plan_picks_one_path_and_refuses_what_cannot_run() {
+    use splatter::bench::SimCase;
+    use splatter::sim::gpu::{P2gRace, PlanError, SimPlan, SimRequest};
+    use splatter::sim::Separation;
+    let case = SimCase::new(2_000, 16);
+    let mut separated = case.params.clone();
+    separated.separation = Separation::DamageGradient;
+    for gpu in gpus() {
+        let ask = |params, forced, deterministic, steps| {
+            SimPlan::choose(
+                &gpu,
+                &SimRequest {
+                    params,
+                    particles: case.particles.len(),
+                    cells: case.grid.cells,
+                    steps,
+                    forced,
+                    deterministic,
+                },
+            )
+        };
+        for path in P2gPath::ALL {
+            if path == P2gPath::Atomic && !gpu.features.float32_atomics {
+                continue;
+            }
+            let plan = ask(&case.params, Some(path), false, 1).unwrap();
+            assert_eq!((plan.p2g, plan.race), (path, None));
+        }
+        let deterministic = ask(&case.params, None, true, u64::MAX).unwrap();
+        assert_ne!(deterministic.p2g, P2gPath::Atomic);
+        assert!(deterministic.race.is_none());
+        assert_eq!(
+            ask(&separated, None, false, u64::MAX).unwrap().p2g,
+            P2gPath::Gather
+        );
+        // A short run is not raced; a long one is where the adapter leaves the choice open.
+        assert!(ask(&case.params, None, false, 1).unwrap().race.is_none());
+        let long = ask(&case.params, None, false, u64::MAX).unwrap();
+        let decides = P2gRace::decides(&gpu, &case.params, case.particles.len());
+        assert_eq!(long.race.is_some(), decides, "{}", gpu.describe());
+        if let Some(race) = long.race {
+            assert_eq!(long.p2g, race.winner());
+        }
+        assert!(matches!(
+            ask(&case.params, Some(P2gPath::Atomic), true, 1),
+            Err(PlanError::AtomicNotDeterministic)
+        ));
+        let too_many = SimPlan::check_grid(&gpu, DVec3::splat(2000.0), false, false);
+        assert!(
+            matches!(too_many, Err(PlanError::TooManyNodes(_))),
+            "{too_many:?}"
+        );
+        let too_wide = SimPlan::check_grid(&gpu, DVec3::new(1600.0, 1600.0, 1600.0), true, false);
+        assert!(matches!(too_wide, Err(PlanError::Limit(_))), "{too_wide:?}");
+        SimPlan::check_grid(&gpu, DVec3::splat(64.0), true, true).unwrap();
+    }
+}

@@ -6,6 +6,7 @@ pub mod buffers;
 mod kernel;
 #[cfg(test)]
 pub(crate) mod layout_check;
+pub mod limits;
 pub mod pages;
 pub mod ranges;
 pub mod scan;

@@ -19,9 +19,8 @@ use crate::scene::lighting::SceneLighting;
 use crate::scene::simulation::SimulationSetup;
 use crate::scene::{self, BuildReport, Scene};
 use crate::sim::frame::FrameError;
-use crate::sim::gpu::{GpuSim, P2gPath, P2gRace, Watchdog};
+use crate::sim::gpu::{GpuSim, P2gPath, SimPlan, SimRequest, Watchdog, FIXED_POINT_CELLS_PER_STEP};
 use crate::sim::models::PlasticModel;
-use crate::sim::step::layout::FIXED_POINT_CELLS_PER_STEP;
 use crate::sim::time_step::{Clock, StepPlan};
 use crate::splat::sh::ShRotator;
 
@@ -34,12 +33,13 @@ pub(super) fn execute(
 ) -> Result<Summary> {
     let opts = &job.opts;
     let scene = &job.scene;
-    if opts.p2g == Some(P2gPath::Atomic) && opts.deterministic {
-        bail!("--p2g atomic sums with float atomics, whose order varies: it cannot be --deterministic (use --p2g fixed or gather)");
-    }
+    SimPlan::check_options(opts.p2g, opts.deterministic)?;
     let simulated = scene.objects.iter().any(|o| o.physics.is_some());
-    if simulated {
-        check_grid_fits(gpu, scene)?;
+    if let Some(spec) = scene.simulation.as_ref().filter(|_| simulated) {
+        let (lo, hi) = spec.grid_box();
+        let separation = spec.separation != scene::physics::SeparationSpec::None;
+        let surface = scene.objects.iter().any(|o| o.collider.is_some());
+        SimPlan::check_grid(gpu, (hi - lo) / spec.dx, separation, surface)?;
     }
     let setup = scene::simulation::prepare(scene, splats.clone(), &report)?;
     if setup.is_none() {
@@ -67,29 +67,26 @@ pub(super) fn execute(
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
-    let p2g = match &setup {
-        Some(_) if opts.p2g.is_some() => opts.p2g.expect("matched"),
-        Some(s) if opts.deterministic => {
-            P2gPath::deterministic_for(gpu, &s.params, s.particles.len(), gather_fits(gpu, s))
-        }
-        Some(s) if races(gpu, s, job.frames.last().unwrap_or(0)) => {
-            let race = P2gRace::on(gpu)?;
-            on_event(Event::Note(describe_race(&race)));
-            race.winner()
-        }
-        Some(s) => P2gPath::for_params(gpu, &s.params),
-        None => P2gPath::best(gpu),
+    let plan = match &setup {
+        Some(s) => Some(SimPlan::choose(
+            gpu,
+            &SimRequest {
+                params: &s.params,
+                particles: s.particles.len(),
+                cells: s.grid.cells,
+                steps: u64::from(s.steps_per_frame) * u64::from(job.frames.last().unwrap_or(0)),
+                forced: opts.p2g,
+                deterministic: opts.deterministic,
+            },
+        )?),
+        None => None,
     };
+    if let Some(race) = plan.as_ref().and_then(|p| p.race) {
+        on_event(Event::Note(race.describe()));
+    }
+    let p2g = plan.as_ref().map_or(P2gPath::best(gpu), |p| p.p2g);
     let mut needs = limits::render_needs(splats.len(), width, height);
     if let Some(s) = &setup {
-        let gather = p2g == P2gPath::Gather;
-        let surface = s.params.boundaries.surface.is_some();
-        needs.extend(limits::sim_needs(
-            s.particles.len(),
-            s.grid.cells,
-            gather,
-            surface,
-        ));
         needs.extend(limits::derive_needs(
             s.binding.len(),
             s.particles.len(),
@@ -218,33 +215,6 @@ pub(super) fn execute(
     job.finish(result, sink, fragments, on_event)
 }
 
-/// The grid's size, checked before the simulation setup builds it: its nodes are indexed
-/// with 32 bits, and what the GPU step holds per block, per cell (the gather path, which
-/// two-field separation runs on) and per node (a captured surface's distance) must fit the
-/// adapter.
-fn check_grid_fits(gpu: &GpuContext, scene: &scene::Scene) -> Result<()> {
-    if let Some(spec) = &scene.simulation {
-        let (lo, hi) = spec.grid_box();
-        let cells = ((hi - lo) / spec.dx - 1e-9).ceil().max(DVec3::ONE);
-        let nodes = cells + 1.0;
-        if !nodes.is_finite() || nodes.element_product() >= f64::from(u32::MAX) {
-            bail!(
-                "simulation: a grid of {:.0}×{:.0}×{:.0} nodes (domain / dx) has more nodes than the 2^32 the simulation indexes; use a coarser or smaller grid (a larger simulation.dx, or a smaller simulation.domain)",
-                nodes.x,
-                nodes.y,
-                nodes.z
-            );
-        }
-        let gather = spec.separation != scene::physics::SeparationSpec::None;
-        let surface = scene.objects.iter().any(|o| o.collider.is_some());
-        limits::check_gpu(
-            gpu,
-            &limits::sim_needs(0, cells.as_uvec3(), gather, surface),
-        )?;
-    }
-    Ok(())
-}
-
 /// With `--resume`: the checkpoint to continue from, if it is not past the first frame
 /// still to render.
 fn resume_state(
@@ -302,35 +272,6 @@ fn describe_lighting(l: &SceneLighting, gaussians: usize) -> String {
         )),
         gaussians,
         l.normals_seconds
-    )
-}
-
-/// Whether this run's P2G path is raced for ([`P2gRace`]): the adapter leaves the choice
-/// open, the gather's buffers fit it, and the simulation up to `last_frame` is long enough
-/// to pay for the race.
-fn races(gpu: &GpuContext, s: &SimulationSetup, last_frame: u32) -> bool {
-    let steps = u64::from(s.steps_per_frame) * u64::from(last_frame);
-    P2gRace::decides(gpu, &s.params, s.particles.len())
-        && P2gRace::worth_running(s.particles.len(), steps)
-        && gather_fits(gpu, s)
-}
-
-/// Whether the gather path's buffers for this simulation fit the adapter's limits: it
-/// indexes every base cell of the grid, where the scatters hold only the blocks the
-/// particles reach.
-fn gather_fits(gpu: &GpuContext, s: &SimulationSetup) -> bool {
-    let surface = s.params.boundaries.surface.is_some();
-    let needs = limits::sim_needs(s.particles.len(), s.grid.cells, true, surface);
-    limits::check_gpu(gpu, &needs).is_ok()
-}
-
-fn describe_race(race: &P2gRace) -> String {
-    format!(
-        "P2G on this adapter: float atomics {:.1} ms, gather by subgroups {:.1} ms a step of a probe block (timed in {:.1} s); taking {}",
-        race.atomic_ms,
-        race.gather_ms,
-        race.seconds,
-        race.winner().name()
     )
 }
 

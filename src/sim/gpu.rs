@@ -37,12 +37,15 @@ use super::codes::{WatchSlot, BLOCK};
 
 mod p2g_path;
 mod p2g_race;
+pub mod plan;
 mod pool;
 mod readback;
 mod watchdog;
 
+pub use super::step::layout::FIXED_POINT_CELLS_PER_STEP;
 pub use p2g_path::P2gPath;
 pub use p2g_race::P2gRace;
+pub use plan::{PlanError, SimPlan, SimRequest};
 pub use watchdog::Watchdog;
 
 /// Bytes of a scatter path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes

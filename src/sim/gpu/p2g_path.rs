@@ -51,7 +51,7 @@ impl P2gPath {
     /// where P2G gathers by subgroups ([`GpuContext::cpu_subgroups_of_eight`]: CPU drivers,
     /// on which the fixed-point scatter's integer atomics run one lane at a time) with the
     /// particles in one storage binding and the gather's buffers within the adapter's
-    /// limits (`gather_fits`, `limits::sim_needs`); else the fixed-point scatter.
+    /// limits (`plan::sim_needs`); else the fixed-point scatter.
     pub fn deterministic_for(
         gpu: &GpuContext,
         params: &StepParams,
