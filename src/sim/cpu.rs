@@ -16,6 +16,8 @@
 //! for any number of threads (tested), and the scheme is the atomics-free P2G the GL path
 //! of the GPU step can copy.
 
+pub mod textbook;
+
 use glam::{DMat3, DVec3, IVec3, UVec3};
 use rayon::prelude::*;
 
