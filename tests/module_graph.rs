@@ -2,7 +2,7 @@
 //! two top-level modules) use each other, directly or through others.
 //!
 //! The graph is read from the sources: every `crate::…` and `super::…` path outside
-//! comments and test modules (`#[cfg(test)]` to the end of the file), `use` groups
+//! comments and test modules (`#[cfg(test)]` to the end of the file, or a `tests.rs`), `use` groups
 //! expanded, each resolved to the deepest module file it names. A use of an ancestor (a
 //! child using its parent's types, a parent re-exporting its children) is not a
 //! dependency between units; every other edge A → B is recorded between the two siblings
@@ -33,7 +33,9 @@ fn modules(root: &Path) -> BTreeMap<Module, String> {
                 .iter()
                 .map(|p| p.to_string_lossy().trim_end_matches(".rs").to_string())
                 .collect();
-            if parts == ["main"] {
+            // `main.rs` is the binary; a `tests.rs` is a module's `#[cfg(test)] mod tests;`,
+            // left out like a test module written inline.
+            if parts == ["main"] || parts.last().is_some_and(|p| p == "tests") {
                 continue;
             }
             if parts.last().is_some_and(|p| p == "mod" || p == "lib") {

@@ -4,6 +4,72 @@
 
 use super::*;
 
+/// Bytes of a scatter path's sums for a pool of `blocks` blocks (64 nodes of 16 bytes
+/// each with floats, 32 with fixed-point word pairs; twice that for a FLIP/PIC blend); the
+/// gather path sums in registers and needs none (one placeholder node).
+pub(super) fn sums_bytes(path: P2gPath, step: &GpuStep, blocks: u32) -> u64 {
+    // A FLIP/PIC blend also sums the momentum without forces: a second vec4 per node.
+    let per_node = if step.flip > 0.0 { 32 } else { 16 };
+    match path {
+        P2gPath::Atomic => u64::from(blocks) * 64 * per_node,
+        P2gPath::Fixed => u64::from(blocks) * 64 * per_node * 2,
+        P2gPath::Gather => 16,
+    }
+}
+
+/// Blocks of 4³ nodes the particles' stencils reach now.
+pub(super) fn blocks_reached(particles: &Particles, grid: &Grid) -> u32 {
+    let per_axis = grid.nodes().map(|n| n.div_ceil(BLOCK));
+    let mut seen = std::collections::HashSet::new();
+    for x in &particles.x {
+        let Some(st) = grid.stencil(*x) else {
+            continue;
+        };
+        let base = st.base.as_uvec3();
+        let (lo, hi) = (base / BLOCK, (base + 2) / BLOCK);
+        for z in lo.z..=hi.z {
+            for y in lo.y..=hi.y {
+                for x in lo.x..=hi.x {
+                    seen.insert(x + per_axis.x * (y + per_axis.y * z));
+                }
+            }
+        }
+    }
+    seen.len() as u32
+}
+
+/// Entries of the gather path's cell ranges: one per base cell of a quadratic stencil
+/// ((cells − 1) per axis, every stencil on the grid), and one for particles off it.
+pub fn gather_range_entries(cells: glam::UVec3) -> u64 {
+    cells
+        .to_array()
+        .iter()
+        .map(|c| u64::from(c.saturating_sub(1)))
+        .product::<u64>()
+        + 1
+}
+
+/// First pool size: twice the blocks `reached` at the start (at least 64), at most
+/// `max_blocks`. [`GpuSim::fit_pool`] grows it between frames.
+pub(super) fn initial_pool(reached: u32, max_blocks: u32) -> u32 {
+    (2 * reached).max(64).min(max_blocks)
+}
+
+/// The largest pool: every block of the domain, at most what the grid texture holds and
+/// what keeps the pool's per-node arrays (the scatter's sums, separation's far field)
+/// within one storage binding each (they are bound whole).
+pub(super) fn max_pool_blocks(
+    limits: &wgpu::Limits,
+    (path, step, separation): (P2gPath, &GpuStep, bool),
+    blocks: u32,
+) -> u32 {
+    let per_block = sums_bytes(path, step, 1).max(separation_bytes(separation, 1, 32));
+    let binding = limits.max_storage_buffer_binding_size;
+    let by_binding = u32::try_from(binding / per_block.max(1)).unwrap_or(u32::MAX);
+    let texture = GridTexture::max_blocks(limits.max_texture_dimension_2d);
+    blocks.min(texture).min(by_binding)
+}
+
 impl GpuSim {
     /// Blocks of 4³ nodes the grid pool holds (the sparse grid's capacity).
     pub fn pool_blocks(&self) -> u32 {
