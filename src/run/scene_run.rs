@@ -25,7 +25,12 @@ use crate::sim::time_step::{Clock, StepPlan};
 use crate::splat::sh::ShRotator;
 
 mod messages;
+mod setup;
 use messages::{describe_lighting, describe_simulation, watchdog_message};
+use setup::{
+    create_outputs, first_missing_frame, manifest_settings, note_scene, plan_gpu, prepare_lighting,
+    prepare_simulation, recomputed_normals, resume_state,
+};
 
 pub(super) fn execute(
     job: Job,
@@ -36,162 +41,52 @@ pub(super) fn execute(
 ) -> Result<Summary> {
     let opts = &job.opts;
     let scene = &job.scene;
-    SimPlan::check_options(opts.p2g, opts.deterministic)?;
-    let simulated = scene.objects.iter().any(|o| o.physics.is_some());
-    if let Some(spec) = scene.simulation.as_ref().filter(|_| simulated) {
-        let (lo, hi) = spec.grid_box();
-        let separation = spec.separation != scene::physics::SeparationSpec::None;
-        let surface = scene.objects.iter().any(|o| o.collider.is_some());
-        SimPlan::check_grid(gpu, (hi - lo) / spec.dx, separation, surface)?;
-    }
-    let setup = scene::simulation::prepare(scene, splats.clone(), &report)?;
-    if setup.is_none() {
-        let name = match &opts.input {
-            super::Input::Scene(Some(p)) => p.display().to_string(),
-            _ => "the default scene".into(),
-        };
-        if opts.fragments {
-            bail!("--fragments counts the pieces of simulated objects, and {name} simulates none (no object has `physics`)");
-        }
-        if opts.export_particles.is_some() {
-            bail!("--export-particles writes the particles of simulated objects, and {name} simulates none (no object has `physics`)");
-        }
-    }
+    let setup = prepare_simulation(&job, splats.clone(), &report, gpu)?;
     let hash = checkpoint::scene_hash(scene, &splats, setup.as_ref());
     let splats = setup.as_ref().map_or(splats, |s| s.splats.clone());
     let dir = scene.output_dir();
-    create_dir(&dir, "output directory")?;
-    for (d, format) in opts.exports() {
-        create_dir(d, format.directory_name())?;
-    }
-    if let Some(d) = &opts.export_particles {
-        create_dir(d, "particle export directory")?;
-    }
+    create_outputs(&job, &dir)?;
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
-    let (width, height) = (scene.output.width, scene.output.height);
-    let plan = match &setup {
-        Some(s) => Some(SimPlan::choose(
-            gpu,
-            &SimRequest {
-                params: &s.params,
-                particles: s.particles.len(),
-                cells: s.grid.cells,
-                steps: u64::from(s.steps_per_frame) * u64::from(job.frames.last().unwrap_or(0)),
-                forced: opts.p2g,
-                deterministic: opts.deterministic,
-            },
-        )?),
-        None => None,
-    };
-    if let Some(race) = plan.as_ref().and_then(|p| p.race) {
-        on_event(Event::Note(race.describe()));
-    }
-    let p2g = plan.as_ref().map_or(P2gPath::best(gpu), |p| p.p2g);
-    let mut needs = limits::render_needs(splats.len(), width, height);
-    if let Some(s) = &setup {
-        needs.extend(limits::derive_needs(
-            s.binding.len(),
-            s.particles.len(),
-            splats.len(),
-        ));
-    }
-    limits::check_gpu(gpu, &needs)?;
-    if opts.resume {
-        check_manifest_for_resume(&manifest_file, hash)?;
-    }
-    let first_missing = if opts.resume {
-        job.frames.iter().find(|f| !job.frame_done(&dir, *f))
-    } else {
-        job.frames.first()
-    };
+    let p2g = plan_gpu(&job, setup.as_ref(), splats.len(), gpu, on_event)?;
+    let first_missing = first_missing_frame(&job, &dir, (&manifest_file, hash))?;
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
-    for note in &scene.up_notes {
-        on_event(Event::Note(note.clone()));
-    }
-    on_event(Event::Note(format!(
-        "scene: {} Gaussians, {}×{}, frames {} → {}",
-        splats.len(),
-        width,
-        height,
-        job.frames,
-        dir.display()
-    )));
+    note_scene(&job, splats.len(), &dir, on_event);
     let mut renderer = GpuRenderer::new(gpu);
     renderer.upload(gpu, &splats)?;
-    // Relighting before the derive pass is built: derive moves the simulated normals.
-    let lighting = scene::lighting::prepare(
-        scene,
-        &splats,
-        &report,
-        setup.as_ref().map(|s| s.parts.as_slice()),
-        setup
-            .as_ref()
-            .map(|s| (s.grid.lo.as_vec3(), s.grid.hi().as_vec3())),
+    let lighting = prepare_lighting(
+        &job,
+        (&splats, &report),
+        setup.as_ref(),
+        (gpu, &mut renderer),
+        on_event,
     )?;
-    if let Some(l) = &lighting {
-        on_event(Event::Note(describe_lighting(l, splats.len())));
-        renderer.set_lighting(gpu, &l.setup)?;
-    }
     let mut sim = match &setup {
-        Some(s) => {
-            for w in &s.warnings {
-                log::warn!("{w}");
-            }
-            on_event(Event::Note(describe_simulation(s, p2g, opts.deterministic)));
-            Some(Simulation::new(
-                gpu,
-                &renderer,
-                s,
-                resume_from.as_ref(),
-                p2g,
-            )?)
-        }
+        Some(s) => Some(Simulation::start(
+            s,
+            (gpu, &renderer),
+            resume_from.as_ref(),
+            (p2g, opts.deterministic),
+            on_event,
+        )?),
         None => None,
     };
-    // Simulated objects whose normals are recomputed every frame, on the GPU.
     let gpu_normals = match (&lighting, &setup) {
-        (Some(l), Some(s)) if !l.recompute.is_empty() => Some(GpuNormals::new(
-            gpu,
-            &renderer,
-            &l.recomputed_objects(&splats),
-            s.grid.lo.as_vec3(),
-            s.grid.hi().as_vec3(),
-        )?),
+        (Some(l), Some(s)) => recomputed_normals(l, s, &splats, (gpu, &renderer))?,
         _ => None,
     };
-    let settings = Settings {
-        width,
-        height,
-        fps: scene.output.fps,
-        deterministic: opts.deterministic,
-        gaussians: splats.len(),
-        particles: setup.as_ref().map(|s| s.particles.len()),
-        p2g: setup.as_ref().map(|_| p2g.name().to_string()),
-        steps_per_frame: setup.as_ref().map(|s| s.steps_per_frame),
-        dt: setup.as_ref().map(|s| s.params.dt),
-        checkpoint_every: if setup.is_some() {
-            opts.checkpoint_every
-        } else {
-            0
-        },
-        resumed_from: resume_from.as_ref().map(|cp| cp.frame),
-        from_states: None,
-        export_ply: opts.export_ply.clone(),
-        export_spz: opts.export_spz.clone(),
-        export_glb: opts.export_glb.clone(),
-        export_particles: opts.export_particles.clone(),
-        ..job.frame_settings()
-    };
+    let settings = manifest_settings(
+        &job,
+        setup.as_ref(),
+        (p2g, splats.len()),
+        resume_from.as_ref(),
+    );
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
-    let fragment_log = match opts.fragments {
-        true => Some(FragmentLog::create(
-            &dir.join("fragments.csv"),
-            opts.resume,
-        )?),
-        false => None,
-    };
+    let fragment_log = opts
+        .fragments
+        .then(|| FragmentLog::create(&dir.join("fragments.csv"), opts.resume))
+        .transpose()?;
     let mut frames = Frames {
         job: &job,
         gpu,
@@ -218,53 +113,6 @@ pub(super) fn execute(
     job.finish(result, sink, fragments, on_event)
 }
 
-/// With `--resume`: the checkpoint to continue from, if it is not past the first frame
-/// still to render.
-fn resume_state(
-    job: &Job,
-    setup: Option<&SimulationSetup>,
-    dir: &Path,
-    hash: u64,
-    first_missing: Option<u32>,
-    on_event: &mut dyn FnMut(Event),
-) -> Result<Option<Checkpoint>> {
-    if !job.opts.resume {
-        return Ok(None);
-    }
-    let file = checkpoint_path(dir);
-    let state = match (setup, first_missing) {
-        (Some(s), Some(missing)) if file.exists() => {
-            let cp = Checkpoint::load(&file)?;
-            cp.check_matches(
-                &file,
-                hash,
-                job.opts.deterministic,
-                s.particles.len(),
-                s.steps_per_frame,
-            )?;
-            if cp.frame <= missing {
-                Some(cp)
-            } else {
-                on_event(Event::Note(format!(
-                    "resume: the checkpoint is at frame {}, after frame {missing} which is missing; simulating from frame 0",
-                    cp.frame
-                )));
-                None
-            }
-        }
-        _ => None,
-    };
-    on_event(Event::Note(match (first_missing, &state) {
-        (None, _) => format!("resume: frames {} are all written already", job.frames),
-        (Some(m), Some(cp)) => format!(
-            "resume: continuing from the checkpoint at frame {} (first missing frame {m})",
-            cp.frame
-        ),
-        (Some(m), None) => format!("resume: first missing frame {m}"),
-    }));
-    Ok(state)
-}
-
 /// The simulated part of a run on the GPU: the step, the derive pass into the renderer's
 /// buffer, and the kinematic objects' rigid passes.
 struct Simulation<'a> {
@@ -278,6 +126,21 @@ struct Simulation<'a> {
 }
 
 impl<'a> Simulation<'a> {
+    /// The simulation of `s` on the GPU, its warnings logged and its line noted.
+    fn start(
+        s: &'a SimulationSetup,
+        (gpu, renderer): (&GpuContext, &GpuRenderer),
+        resume_from: Option<&Checkpoint>,
+        (p2g, deterministic): (P2gPath, bool),
+        on_event: &mut dyn FnMut(Event),
+    ) -> Result<Self> {
+        for w in &s.warnings {
+            log::warn!("{w}");
+        }
+        on_event(Event::Note(describe_simulation(s, p2g, deterministic)));
+        Simulation::new(gpu, renderer, s, resume_from, p2g)
+    }
+
     fn new(
         gpu: &GpuContext,
         renderer: &GpuRenderer,

@@ -40,6 +40,7 @@ mod p2g_race;
 pub mod plan;
 mod pool;
 mod readback;
+mod setup;
 mod watchdog;
 
 pub use super::step::layout::FIXED_POINT_CELLS_PER_STEP;
@@ -48,6 +49,7 @@ pub use p2g_race::P2gRace;
 pub use plan::{PlanError, SimPlan, SimRequest};
 pub use pool::gather_range_entries;
 use pool::{blocks_reached, initial_pool, max_pool_blocks, sums_bytes};
+use setup::{allocate, Layout, PoolSize};
 pub use watchdog::Watchdog;
 
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
@@ -172,35 +174,8 @@ impl GpuSim {
         path: P2gPath,
         pages: Pages,
     ) -> Result<GpuSim, SimSetupError> {
-        if pages.count > 1 && path == P2gPath::Gather {
-            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
-                "{} particles span {} storage bindings of {}; the gather P2G path needs them in one: use the fixed-point or atomic path, or fewer particles",
-                particles.len(),
-                pages.count,
-                gpu.describe()
-            ))));
-        }
-        if path == P2gPath::Atomic && !gpu.features.float32_atomics {
-            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
-                "the atomic P2G path needs float atomics, which {} lacks",
-                gpu.describe()
-            ))));
-        }
         let separation = params.separation != super::Separation::None;
-        if separation && path != P2gPath::Gather {
-            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
-                "two-field separation (simulation.separation) runs on the gather P2G path; \
-                 the {} path has one velocity field per node",
-                path.name()
-            ))));
-        }
-        let texture_limit = gpu.limits.max_texture_dimension_2d;
-        if texture_limit < GRID_TEXELS_PER_ROW {
-            return Err(SimSetupError::Gpu(GpuError::Failed(format!(
-                "the simulation's grid texture is {GRID_TEXELS_PER_ROW} texels wide, and {} allows 2D textures of at most {texture_limit}",
-                gpu.describe()
-            ))));
-        }
+        Self::check_path(gpu, particles.len(), path, pages, separation)?;
         let n = particles.len() as u32;
         let mut step = GpuStep::new(grid, materials, params, n)?;
         // From the masses as the GPU holds them (f32), so that particles the GPU cannot
@@ -208,7 +183,8 @@ impl GpuSim {
         let mass = || particles.mass.iter().map(|m| f64::from(*m as f32));
         let masses = (mass().sum(), mass().fold(0.0, f64::max));
         step.set_fixed_point(masses.0, masses.1);
-        let device = &gpu.device;
+        let pool = PoolSize::of(gpu, particles, grid, (path, &step, separation))?;
+        step.pool_blocks = pool.first;
         let scatter = match path {
             P2gPath::Gather => None,
             P2gPath::Atomic => Some(Scatter::Float),
@@ -216,116 +192,27 @@ impl GpuSim {
         };
         let used = crate::sim::models::ModelsUsed::of(materials);
         let passes = Passes::new(gpu, (scatter, separation), &used);
-        let x_mass: Vec<[f32; 4]> = (0..particles.len())
-            .map(|p| {
-                particles.x[p]
-                    .as_vec3()
-                    .extend(particles.mass[p] as f32)
-                    .to_array()
-            })
-            .collect();
-        let v_volume: Vec<[f32; 4]> = (0..particles.len())
-            .map(|p| {
-                particles.v[p]
-                    .as_vec3()
-                    .extend(particles.volume0[p] as f32)
-                    .to_array()
-            })
-            .collect();
-        let f: Vec<[[f32; 4]; 3]> = particles.f.iter().map(|m| mat3_to_gpu(*m)).collect();
-        let c: Vec<[[f32; 4]; 3]> = particles.c.iter().map(|m| mat3_to_gpu(*m)).collect();
-        let alpha: Vec<f32> = particles.alpha.iter().map(|a| *a as f32).collect();
-        let base_cells = (grid.cells - 1).element_product();
-        let blocks = grid.nodes().map(|n| n.div_ceil(BLOCK)).element_product();
-        let max_pool_blocks = max_pool_blocks(&gpu.limits, (path, &step, separation), blocks);
-        if blocks > max_pool_blocks {
-            // Said at setup, not hours in: the domain is larger than any pool this adapter
-            // holds, so only a moving region that stays within the cap can run.
-            log::warn!(
-                "the simulation's domain has {blocks} blocks of 4³ grid nodes and this adapter's grid pool holds at most {max_pool_blocks} (its grid texture and one storage binding): the run stops with an error if the moving region grows past that; a larger simulation.dx or a smaller simulation.domain avoids it"
-            );
-        }
-        let reached = blocks_reached(particles, grid);
-        if reached > max_pool_blocks {
-            return Err(SimSetupError::PoolAtLimit {
-                needed: reached,
-                limit: max_pool_blocks,
-            });
-        }
-        let pool = initial_pool(reached, max_pool_blocks);
-        step.pool_blocks = pool;
-        let nn = u64::from(n);
-        let buffers = StepBuffers {
-            step: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("sim step"),
-                contents: bytemuck::bytes_of(&step),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            }),
-            x_mass: init(gpu, "sim x_mass", &x_mass, true),
-            v_volume: init(gpu, "sim v_volume", &v_volume, true),
-            deformation: init(gpu, "sim F", &f, true),
-            affine_velocity: init(gpu, "sim C", &c, true),
-            alpha: init(gpu, "sim alpha", &alpha, true),
-            material: init(gpu, "sim material", &particles.material, false),
-            keys: zeroed(gpu, "sim cell keys", nn * 4),
-            values: zeroed(gpu, "sim cell values", nn * 4),
-            keys_alt: zeroed(gpu, "sim cell keys alt", nn * 4),
-            values_alt: zeroed(gpu, "sim cell values alt", nn * 4),
-            key_count: init(gpu, "sim key count", &[n], false),
-            affine: zeroed(gpu, "sim affine", nn * 48),
-            // Each cell's run of sorted particles: the gather path's alone.
-            ranges: zeroed(
-                gpu,
-                "sim cell ranges",
-                match path {
-                    P2gPath::Gather => gather_range_entries(grid.cells) * 8,
-                    _ => 16,
-                },
-            ),
-            grid: zeroed(gpu, "sim grid pool", sums_bytes(path, &step, pool)),
-            grid_velocity: GridTexture::new(device, "sim grid velocity", pool),
-            grid_velocity_change: velocity_change_texture(device, &step, pool),
-            block_flags: zeroed(gpu, "sim block flags", u64::from(blocks) * 4),
-            block_slot: zeroed(gpu, "sim block slots", u64::from(blocks) * 4),
-            surface: match &params.boundaries.surface {
-                Some(s) => init(gpu, "sim surface phi", &s.phi, false),
-                None => init(gpu, "sim surface phi", &[0.0f32], false),
-            },
-            active_blocks: zeroed(gpu, "sim active blocks", u64::from(pool) * 4),
-            block_args: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("sim block dispatch"),
-                size: 16,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::INDIRECT
-                    | wgpu::BufferUsages::COPY_DST
-                    | wgpu::BufferUsages::COPY_SRC,
-                mapped_at_creation: false,
-            }),
-            flags: zeroed(gpu, "sim watchdog flags", WATCHDOG_BYTES),
-            damage: zeroed(
-                gpu,
-                "sim damage field",
-                separation_bytes(separation, pool, 8),
-            ),
-            ridge: zeroed(gpu, "sim ridge", separation_bytes(separation, pool, 16)),
-            damage_gradient: zeroed(
-                gpu,
-                "sim damage gradient",
-                if separation { nn.max(1) * 16 } else { 16 },
-            ),
-            far_field: zeroed(gpu, "sim far field", separation_bytes(separation, pool, 32)),
-            pages: PageRanges::new(device, "sim particle pages", pages),
+        let layout = Layout {
+            particles,
+            grid,
+            params,
+            step: &step,
+            path,
+            separation,
+            pool,
+            pages,
         };
-        let sort_bits = 32 - base_cells.leading_zeros();
-        let binds = passes.bind(device, &buffers, n, sort_bits);
+        let buffers = allocate(gpu, &layout);
+        let sort_bits = 32 - (grid.cells - 1).element_product().leading_zeros();
+        let binds = passes.bind(&gpu.device, &buffers, n, sort_bits);
         Ok(GpuSim {
             path,
             passes,
             buffers,
             binds,
             num_particles: n,
-            num_blocks: blocks,
-            max_pool_blocks,
+            num_blocks: pool.domain,
+            max_pool_blocks: pool.max,
             sort_bits,
             consts: step,
             kinematic: Vec::new(),
@@ -520,34 +407,6 @@ impl GpuSim {
 
     /// Bytes of GPU memory this simulation holds (particles, sort, cells, grid).
     pub fn gpu_bytes(&self) -> u64 {
-        let b = &self.buffers;
-        [
-            &b.x_mass,
-            &b.v_volume,
-            &b.deformation,
-            &b.affine_velocity,
-            &b.alpha,
-            &b.material,
-            &b.keys,
-            &b.values,
-            &b.keys_alt,
-            &b.values_alt,
-            &b.affine,
-            &b.ranges,
-            &b.grid,
-            &b.block_flags,
-            &b.block_slot,
-            &b.active_blocks,
-            &b.block_args,
-            &b.damage,
-            &b.ridge,
-            &b.damage_gradient,
-            &b.far_field,
-        ]
-        .iter()
-        .map(|buf| buf.size())
-        .sum::<u64>()
-            + b.grid_velocity.bytes()
-            + b.grid_velocity_change.bytes()
+        self.buffers.bytes()
     }
 }

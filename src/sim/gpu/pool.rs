@@ -95,19 +95,8 @@ impl GpuSim {
     pub fn set_pool_blocks(&mut self, gpu: &GpuContext, blocks: u32) -> Result<(), GpuError> {
         let blocks = blocks.clamp(1, self.max_pool_blocks);
         self.consts.pool_blocks = blocks;
-        self.buffers.grid = zeroed(
-            gpu,
-            "sim grid pool",
-            sums_bytes(self.path, &self.consts, blocks),
-        );
-        self.buffers.grid_velocity = GridTexture::new(&gpu.device, "sim grid velocity", blocks);
-        self.buffers.grid_velocity_change =
-            velocity_change_texture(&gpu.device, &self.consts, blocks);
-        self.buffers.active_blocks = zeroed(gpu, "sim active blocks", u64::from(blocks) * 4);
-        let two = self.separation;
-        self.buffers.damage = zeroed(gpu, "sim damage field", separation_bytes(two, blocks, 8));
-        self.buffers.ridge = zeroed(gpu, "sim ridge", separation_bytes(two, blocks, 16));
-        self.buffers.far_field = zeroed(gpu, "sim far field", separation_bytes(two, blocks, 32));
+        super::setup::PoolBuffers::new(gpu, (self.path, &self.consts, self.separation), blocks)
+            .install(&mut self.buffers);
         gpu.queue
             .write_buffer(&self.buffers.step, 0, bytemuck::bytes_of(&self.consts));
         self.binds = self.passes.bind(

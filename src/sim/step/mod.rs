@@ -239,6 +239,74 @@ pub(crate) struct StepBuffers {
     pub pages: PageRanges,
 }
 
+impl StepBuffers {
+    /// Bytes of every buffer and texture of the step. The struct is taken apart field by
+    /// field (no `..`), so a buffer added to it cannot be left out of the count.
+    pub fn bytes(&self) -> u64 {
+        let StepBuffers {
+            step,
+            x_mass,
+            v_volume,
+            deformation,
+            affine_velocity,
+            alpha,
+            material,
+            keys,
+            values,
+            keys_alt,
+            values_alt,
+            key_count,
+            affine,
+            ranges,
+            grid,
+            grid_velocity,
+            grid_velocity_change,
+            block_flags,
+            block_slot,
+            surface,
+            active_blocks,
+            block_args,
+            flags,
+            damage,
+            ridge,
+            damage_gradient,
+            far_field,
+            pages,
+        } = self;
+        let buffers = [
+            step,
+            x_mass,
+            v_volume,
+            deformation,
+            affine_velocity,
+            alpha,
+            material,
+            keys,
+            values,
+            keys_alt,
+            values_alt,
+            key_count,
+            affine,
+            ranges,
+            grid,
+            block_flags,
+            block_slot,
+            surface,
+            active_blocks,
+            block_args,
+            flags,
+            damage,
+            ridge,
+            damage_gradient,
+            far_field,
+            &pages.buffer,
+        ];
+        buffers.iter().map(|b| b.size()).sum::<u64>()
+            + grid_velocity.bytes()
+            + grid_velocity_change.bytes()
+    }
+}
+
 pub(crate) use crate::sim::codes::GRID_TEXELS_PER_ROW;
 
 /// A vec4 per node of the grid pool as an rgba32float texture, node `n` at texel
