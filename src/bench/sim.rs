@@ -10,6 +10,8 @@ use super::*;
 /// pass. With `separation`, the fracturing cases only (NACC and brittle), with two-field
 /// separation on the gather path. Returns the 20k cases' timings (what a peer is compared
 /// with).
+// Over 80 lines on purpose: one table whose cases, paths and per-pass lines print in the order
+// they run.
 pub fn sim_bench(
     gpu: &GpuContext,
     what: SimBench,

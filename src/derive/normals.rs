@@ -100,6 +100,8 @@ impl GpuNormals {
     /// Normals for `objects` (contiguous, increasing ranges) of `renderer`'s Gaussians,
     /// which must stay inside the box `lo..hi` (the simulation domain; Gaussians outside
     /// are hashed into the border cells). The renderer needs lighting set.
+    // Over 80 lines on purpose: the hash grid's buffers and passes are made in their binding
+    // order, each buffer next to the pass that binds it.
     pub fn new(
         gpu: &GpuContext,
         renderer: &GpuRenderer,

@@ -221,6 +221,8 @@ impl RadixSort {
         }
     }
 
+    // Over 80 lines on purpose: the radix sort's passes and their buffers sized in the order
+    // they run.
     pub fn plan(
         &self,
         device: &wgpu::Device,

@@ -328,6 +328,8 @@ impl SceneLighting {
 /// Gaussians and fill; see `simulation::prepare`). None when
 /// the scene has no `lighting` block. `extra_bounds` (the simulation domain) widens the
 /// shadow volume to cover everything that may move.
+// Over 80 lines on purpose: normals, shadow grid and lights built in the order each needs the
+// one before, for one setup.
 pub fn prepare(
     scene: &Scene,
     splats: &Splats,

@@ -196,6 +196,7 @@ impl ObjectRegions {
 
 impl RegionSpec {
     /// The validated test: exactly one selector with sane values.
+    // Over 80 lines on purpose: one check per selector kind, each with its own error.
     fn test(
         &self,
         origin: &str,

@@ -57,6 +57,8 @@ struct NodeSum {
 /// module docs; with two-field `separation` also into `grid.far`, each particle into the
 /// field each node holds it in (`sim::separation::partition`). Returns how many particles
 /// were left out (stencil off the grid).
+// Over 80 lines on purpose: the counting sort, the ordered gather and the two-field split
+// share one sorted order; kept whole, it reads beside the GPU passes it mirrors.
 pub fn p2g(
     particles: &Particles,
     grid: &mut Grid,
@@ -236,6 +238,8 @@ pub fn grid_update(grid: &mut Grid, dt: f64, gravity: DVec3, boundaries: &Bounda
 
 /// [`grid_update`] with moving colliders (`sim::kinematic`) at their pose at `time`
 /// seconds, applied after the planar colliders and before the walls.
+// Over 80 lines on purpose: one node's conditions in their order (colliders, moving colliders,
+// surface, walls), for one and for two fields.
 pub fn grid_update_at(
     grid: &mut Grid,
     dt: f64,
@@ -337,6 +341,8 @@ pub fn grid_update_at(
 /// Δv_i = v_i − q_i/m_i, q_i = Σ w m_p v_p ([`Grid::carried`]), is what the step's forces
 /// changed at node i. A particle whose stencil
 /// is off the grid moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged).
+// Over 80 lines on purpose: the CPU twin of one GPU pass: transfer, FLIP blend, deformation
+// and plasticity per particle.
 pub fn g2p(
     particles: &mut Particles,
     grid: &Grid,

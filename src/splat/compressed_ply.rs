@@ -88,6 +88,8 @@ fn offset(def: &ElementDef, name: &str, want: ScalarType, file: &str) -> Result<
     ))
 }
 
+// Over 80 lines on purpose: the format's elements in file order (header, chunks, vertices,
+// SH), each checked where it is read, so every error names its element.
 pub fn read(
     bytes: &[u8],
     header: &Header,

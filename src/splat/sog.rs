@@ -250,6 +250,8 @@ fn table(meta: &Value, key: &str, version: u64, file: &str) -> Result<Table, Spl
 }
 
 impl Decoder {
+    // Over 80 lines on purpose: the bundle's images in the order its meta.json lists them,
+    // each decoded where it is checked.
     fn new(
         meta: &Value,
         version: u64,

@@ -56,6 +56,8 @@ impl GpuRenderer {
         Ok(())
     }
 
+    // Over 80 lines on purpose: every frame buffer sized from the frame's plan in one place,
+    // so none is sized twice.
     pub(super) fn ensure_plans(&mut self, gpu: &GpuContext) {
         if self.plans.is_some() {
             return;

@@ -339,6 +339,8 @@ impl GpuRenderer {
         }
     }
 
+    // Over 80 lines on purpose: the frame's passes recorded in order into one encoder; turning
+    // them into pass types like the step's is the planned change.
     fn render_once(
         &self,
         gpu: &GpuContext,

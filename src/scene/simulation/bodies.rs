@@ -30,6 +30,8 @@ impl Bodies {
     /// Object `i` with its selected Gaussians `part`: its materials (and regions'), its
     /// particles (the lattice, or one per Gaussian and fill point), its fill, its Gaussians
     /// into `out` and their binding.
+    // Over 80 lines on purpose: one object's materials, particles, fill, Gaussians and
+    // binding, in the order each needs the one before.
     pub(super) fn add(
         &mut self,
         scene: &Scene,

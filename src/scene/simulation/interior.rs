@@ -14,6 +14,8 @@ pub(super) enum Cover {
 }
 
 /// Fill object `i`'s solid (its selected Gaussians `part`) at spacing `h`, as `cover` says.
+// Over 80 lines on purpose: the fill modes share the voxel grid and the cover built at its
+// start.
 pub(super) fn fill_object(
     scene: &Scene,
     i: usize,

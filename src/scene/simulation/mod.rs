@@ -102,6 +102,8 @@ pub enum PartKind {
 
 /// Turn `splats` (as built by [`Scene::build_splats`], objects in file order with the
 /// counts of `report`) into a simulation, or `None` when the scene simulates nothing.
+// Over 80 lines on purpose: the setup's phases over shared state in their order: moving parts,
+// bodies, grid, step rule.
 pub fn prepare(
     scene: &Scene,
     splats: Splats,

@@ -143,6 +143,7 @@ fn skip_binary_element(
 // ---------------------------------------------------------------------------------------
 // ASCII
 
+// Over 80 lines on purpose: a tokenizer loop with each field's error where the field is read.
 pub(super) fn read_ascii_body(
     body: &[u8],
     before: &[&ElementDef],

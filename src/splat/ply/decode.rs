@@ -265,6 +265,8 @@ fn store(v: &[f64], lay: &Layout, out: &mut OutChunk<'_>, w: usize) -> Verdict {
 
 /// Decode `n` vertices in parallel chunks. `gather(i, vals)` fills the canonical values of
 /// vertex `i`. Skipped vertices are compacted away; returns the cloud and the skip counts.
+// Over 80 lines on purpose: the parallel chunks, the skip counts and the compaction share the
+// chunks' state.
 pub(super) fn decode<G>(
     n: usize,
     lay: &Layout,

@@ -29,6 +29,7 @@ pub fn write_ply(path: &Path, cloud: &GaussianCloud, format: PlyFormat) -> Resul
 /// `comment label <id> <name>` per name lets the reader restore the names).
 /// Normals are zeros when the cloud has none; opacity is written as a logit (clamped to
 /// (1e−12, 1 − 1e−12) so that it stays finite), scale as its natural log.
+// Over 80 lines on purpose: the header and then the body, in the file's property order.
 pub fn write_ply_bytes(
     cloud: &GaussianCloud,
     format: PlyFormat,
