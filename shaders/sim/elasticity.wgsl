@@ -1,6 +1,7 @@
 // Kirchhoff stresses τ(F) of docs/method.md §3 in f32: the WGSL twin of src/sim/elasticity.rs.
-// Needs math.wgsl and svd.wgsl. Lamé parameters come from the host (computed in f64 from
-// E, ν by `Lame::from_young_poisson`; κ = λ + 2μ/3).
+// Needs: sim/math, sim/svd.
+// Lamé parameters come from the host (computed in f64 from E, ν by
+// `Lame::from_young_poisson`; κ = λ + 2μ/3).
 
 // Fixed corotated: τ = 2μ (F − R) Fᵀ + λ (J − 1) J I, R = U Vᵀ from the polar
 // decomposition (a rotation even when det F < 0).

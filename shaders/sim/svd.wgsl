@@ -1,6 +1,6 @@
 // 3×3 singular value decomposition and polar decomposition in f32 (docs/method.md §3, §4, §6): the
 // WGSL twin of src/sim/svd.rs, same convention and same algorithm, f32 tolerances.
-// Needs math.wgsl.
+// Needs: sim/math.
 //
 // Convention: F = U diag(σ) Vᵀ with U, V proper rotations (det +1) and σ₁ ≥ σ₂ ≥ |σ₃|,
 // σ₁, σ₂ ≥ 0; when det F < 0 the sign is pushed into σ₃ (σ₃ < 0 exactly when det F < 0, up

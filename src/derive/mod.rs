@@ -256,13 +256,10 @@ impl RigidDerive {
 }
 
 fn source() -> String {
-    [
-        crate::render::gpu::COMMON,
-        crate::render::gpu::lighting::LIGHTING,
-        crate::sim::wgsl::library().as_str(),
-        include_str!("../../shaders/sim/derive.wgsl"),
-    ]
-    .join("\n")
+    crate::sim::wgsl::library_source()
+        .generated(crate::render::gpu::COMMON.to_string())
+        .generated(crate::render::gpu::lighting::LIGHTING.to_string())
+        .pass(include_str!("../../shaders/sim/derive.wgsl"))
 }
 
 /// The rest covariance of Gaussian `i` of `splats` as a matrix (for the CPU twin).

@@ -15,6 +15,7 @@ use wgpu::util::DeviceExt;
 use crate::gpu::ranges::Ranges;
 use crate::gpu::scan::Scan;
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+use crate::gpu::wgsl::Source;
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::gpu::lighting::LIGHTING;
 use crate::render::gpu::COMMON;
@@ -55,15 +56,12 @@ const CELLS_PER_RADIUS: f32 = 2.0;
 const MAX_CELLS: f32 = 8.0e6;
 
 fn source(pass: &str) -> String {
-    [
-        COMMON,
-        LIGHTING,
-        wgsl::MATH,
-        wgsl::SVD,
-        include_str!("../../shaders/relight/normals_common.wgsl"),
-        pass,
-    ]
-    .join("\n")
+    Source::new()
+        .generated(COMMON.to_string())
+        .generated(LIGHTING.to_string())
+        .module(&wgsl::SVD)
+        .generated(include_str!("../../shaders/relight/normals_common.wgsl").to_string())
+        .pass(pass)
 }
 
 /// One recomputed object: its Gaussians (indices into the renderer's buffers) and the

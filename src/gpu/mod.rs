@@ -12,6 +12,7 @@ pub mod ranges;
 pub mod scan;
 pub mod sort;
 pub mod stages;
+pub mod wgsl;
 
 pub use kernel::{dispatch_1d, Kernel, Shader};
 

@@ -1,6 +1,6 @@
 //! The WGSL twins of this module's f64 oracle: per-particle math in f32 for the GPU MPM
-//! kernels, kept under `shaders/sim/` as modules to concatenate before a kernel's own code
-//! (WGSL has no includes), like `shaders/common.wgsl` for the renderer.
+//! kernels, kept under `shaders/sim/` as [`Module`]s that a kernel's [`Source`] includes
+//! (WGSL has no includes; `gpu::wgsl` puts each in once, after what it needs).
 //!
 //! | module | oracle | WGSL API |
 //! |---|---|---|
@@ -16,39 +16,67 @@
 //! `tests/sim_wgsl.rs` runs each function on thousands of random inputs through a small
 //! compute harness, on the best adapter and on the GL backend, against the oracle.
 
+use crate::gpu::wgsl::{Module, Source};
+
 /// Helpers every other module uses (finiteness by bits, diag, trace, exact power-of-two
 /// scaling, a cancellation-free sinh).
-pub const MATH: &str = include_str!("../../shaders/sim/math.wgsl");
-/// Quadratic B-spline stencil (docs/method.md §2). Needs [`MATH`].
-pub const BSPLINE: &str = include_str!("../../shaders/sim/bspline.wgsl");
-/// 3×3 SVD with det U = det V = +1 and the polar decomposition (docs/method.md §4, §6). Needs [`MATH`].
-pub const SVD: &str = include_str!("../../shaders/sim/svd.wgsl");
-/// Kirchhoff stresses (docs/method.md §3). Needs [`MATH`], [`SVD`].
-pub const ELASTICITY: &str = include_str!("../../shaders/sim/elasticity.wgsl");
+pub static MATH: Module = Module {
+    name: "sim/math",
+    text: include_str!("../../shaders/sim/math.wgsl"),
+    needs: &[],
+};
+/// Quadratic B-spline stencil (docs/method.md §2).
+pub static BSPLINE: Module = Module {
+    name: "sim/bspline",
+    text: include_str!("../../shaders/sim/bspline.wgsl"),
+    needs: &[],
+};
+/// 3×3 SVD with det U = det V = +1 and the polar decomposition (docs/method.md §4, §6).
+pub static SVD: Module = Module {
+    name: "sim/svd",
+    text: include_str!("../../shaders/sim/svd.wgsl"),
+    needs: &[&MATH],
+};
+/// Kirchhoff stresses (docs/method.md §3).
+pub static ELASTICITY: Module = Module {
+    name: "sim/elasticity",
+    text: include_str!("../../shaders/sim/elasticity.wgsl"),
+    needs: &[&MATH, &SVD],
+};
 
-/// All simulation modules in dependency order, ready to prepend to a kernel, after the
-/// codes the laws read (`NACC_VARIANT_*`, `NACC_*` cases: [`super::codes`]).
+/// Every module of the library.
+pub static MODULES: [&Module; 4] = [&MATH, &BSPLINE, &SVD, &ELASTICITY];
+
+/// The simulation's library as the start of a shader: the codes the laws read
+/// (`NACC_VARIANT_*`, `NACC_*` cases: [`super::codes`]), then every module.
+pub fn library_source() -> Source {
+    MODULES.iter().fold(
+        Source::new().generated(super::codes::material_wgsl()),
+        |s, m| s.module(m),
+    )
+}
+
+/// [`library_source`] as text, ready to prepend to a kernel.
 pub fn library() -> String {
-    let codes = super::codes::material_wgsl();
-    [codes.as_str(), MATH, BSPLINE, SVD, ELASTICITY].join("\n")
+    library_source().pass("")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::wgsl::declared_needs;
 
-    /// Every module parses and validates with naga, alone (after its dependencies) and all
-    /// together.
+    /// Every module validates with naga after the modules it says it needs, and nothing
+    /// else (so a need left out of its list fails), and its file's `// Needs:` line names
+    /// the same modules; the whole library validates.
     #[test]
-    fn modules_validate() {
-        for parts in [
-            vec![MATH],
-            vec![MATH, BSPLINE],
-            vec![MATH, SVD],
-            vec![MATH, SVD, ELASTICITY],
-        ] {
+    fn modules_validate_after_their_declared_needs() {
+        for m in MODULES {
             let codes = crate::sim::codes::material_wgsl();
-            crate::gpu::layout_check::validated_module(&format!("{codes}\n{}", parts.join("\n")));
+            let src = Source::new().generated(codes).module(m).pass("");
+            crate::gpu::layout_check::validated_module(&src);
+            let listed: Vec<&str> = m.needs.iter().map(|n| n.name).collect();
+            assert_eq!(declared_needs(m.text), listed, "{}", m.name);
         }
         crate::gpu::layout_check::validated_module(&library());
     }

@@ -1,6 +1,7 @@
 // Shared declarations of the MPM step passes (docs/method.md §2). Mirrored by `#[repr(C)]` types in
-// src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). Concatenated after
-// shaders/sim/{math,bspline,svd,elasticity,nacc}.wgsl.
+// src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). The step's codes and the
+// registry's WGSL come with it (`sim::step::step_source`).
+// Needs: sim/math, sim/bspline.
 
 // The limits MAX_{MATERIALS,COLLIDERS,KINEMATIC}, the boundary kinds BOUNDARY_{STICKY,SLIP,
 // SEPARATE}, the collider shapes SHAPE_{SPHERE,BOX,CYLINDER}, the block size BLOCK and

@@ -3,6 +3,7 @@
 // where m_i > 0, v_i += Δt g, then the planar colliders, the moving (kinematic) colliders at
 // this substep's pose, the captured surface and the domain walls (nodes within `band` of a face). Slip and separate keep the tangential velocity, less Coulomb friction
 // — never v = 0 (docs/method.md §2). Mirrors `cpu::grid_update` and `cpu::Condition::apply`.
+// Needs: sim/step/common.
 
 fn apply_condition(c: Condition, v: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     let vn = dot(v, n);

@@ -3,6 +3,7 @@
 // the active blocks, and the walk over the 27 base cells whose stencils reach a node. The
 // walk has a fixed order (x fastest, as bspline_stencil_offset), so a node's sums are the
 // same on every run.
+// Needs: sim/step/common.
 
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> cell_values: array<u32>;

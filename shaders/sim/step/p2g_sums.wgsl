@@ -1,7 +1,8 @@
 // What both P2G gathers (p2g.wgsl, p2g_broadcast.wgsl) sum at a node, per field, and how
 // they finish the node: the grid update (grid_update.wgsl), with two fields the contact of
-// the fields first (separation.wgsl). SEPARATION is a constant their Rust types prepend.
+// the fields first (separation.wgsl). SEPARATION is a constant their Rust types define.
 // The bindings below are both passes' own (`step::p2g_gather_bindings`).
+// Needs: sim/step/grid_update, sim/step/separation, sim/step/node_gather.
 
 @group(0) @binding(3) var<storage, read> x_mass: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> v_volume: array<vec4<f32>>;

@@ -5,6 +5,7 @@
 // gradient g_i (∇D_p · g_i < 0) in a second, far field: P2G sums them there, the grid
 // update makes both fields' velocities meet at a frictionless contact, and G2P reads each
 // particle's own field.
+// Needs: sim/step/common.
 
 // Whether a particle of damage gradient `gradient` is in the far field of a node whose
 // ridge gradient is `ridge`.

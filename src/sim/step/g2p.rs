@@ -6,7 +6,7 @@
 use crate::gpu::Kernel;
 use crate::sim::models::ModelsUsed;
 
-use super::{material_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
+use super::{BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
 
 pub(crate) struct G2p {
     kernel: Kernel,
@@ -21,12 +21,12 @@ impl G2p {
         (next_keys, separation): (bool, bool),
         used: &ModelsUsed,
     ) -> Self {
-        let src = format!(
-            "const NEXT_KEYS: bool = {next_keys};\nconst SEPARATION: bool = {separation};\n{}",
-            include_str!("../../../shaders/sim/step/g2p.wgsl")
-        );
+        let src = super::step_source(used)
+            .define("NEXT_KEYS", next_keys)
+            .define("SEPARATION", separation)
+            .pass(include_str!("../../../shaders/sim/step/g2p.wgsl"));
         G2p {
-            kernel: material_kernel(device, "sim g2p", &src, used),
+            kernel: Kernel::new(device, "sim g2p", &src, "main"),
         }
     }
 

@@ -4,7 +4,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
+use super::{BindAt, Bound, Extent, StepBuffers, StepPass};
 
 pub(crate) struct GridFromSums {
     kernel: Kernel,
@@ -13,12 +13,13 @@ pub(crate) struct GridFromSums {
 impl GridFromSums {
     /// With `fixed_point`, the sums are `p2g_fixed.wgsl`'s word pairs, else floats.
     pub fn new(device: &wgpu::Device, fixed_point: bool) -> Self {
-        let src = format!(
-            "const FIXED_POINT: bool = {fixed_point};\n{}",
-            include_str!("../../../shaders/sim/step/grid_from_sums.wgsl")
-        );
+        let src = super::step_source(&crate::sim::models::ModelsUsed::all())
+            .define("FIXED_POINT", fixed_point)
+            .pass(include_str!(
+                "../../../shaders/sim/step/grid_from_sums.wgsl"
+            ));
         GridFromSums {
-            kernel: step_kernel(device, "sim grid_from_sums", &src),
+            kernel: Kernel::new(device, "sim grid_from_sums", &src, "main"),
         }
     }
 

@@ -73,38 +73,86 @@ pub(crate) use sort_cells::SortCells;
 use crate::gpu::pages::PageRanges;
 use crate::gpu::sort::SortPlan;
 use crate::gpu::stages::Stage;
+use crate::gpu::wgsl::{Module, Source};
 use crate::gpu::{GpuContext, Kernel};
 use crate::sim::models::ModelsUsed;
+use crate::sim::wgsl;
 
-/// Concatenated WGSL of a step pass: the per-particle math modules, the step's shared
-/// declarations, the material models and their dispatch (with cases for every model),
-/// then the pass.
+/// The step's shared declarations (buffers' layouts, node indexing, the grid texture).
+/// With the codes and the registry's dispatch, which [`step_source`] generates.
+pub(crate) static COMMON: Module = Module {
+    name: "sim/step/common",
+    text: include_str!("../../../shaders/sim/step/common.wgsl"),
+    needs: &[&wgsl::MATH, &wgsl::BSPLINE],
+};
+/// The grid update, called by the P2G gathers as each node's sums finish.
+pub(crate) static GRID_UPDATE: Module = Module {
+    name: "sim/step/grid_update",
+    text: include_str!("../../../shaders/sim/step/grid_update.wgsl"),
+    needs: &[&COMMON],
+};
+/// What two-field separation's passes, P2G and G2P share.
+pub(crate) static SEPARATION: Module = Module {
+    name: "sim/step/separation",
+    text: include_str!("../../../shaders/sim/step/separation.wgsl"),
+    needs: &[&COMMON],
+};
+/// The node passes' gather from the sorted particles (cells' runs, active blocks, the walk
+/// over the 27 base cells).
+pub(crate) static NODE_GATHER: Module = Module {
+    name: "sim/step/node_gather",
+    text: include_str!("../../../shaders/sim/step/node_gather.wgsl"),
+    needs: &[&COMMON],
+};
+/// What both P2G gathers sum at a node and how they finish it.
+pub(crate) static P2G_SUMS: Module = Module {
+    name: "sim/step/p2g_sums",
+    text: include_str!("../../../shaders/sim/step/p2g_sums.wgsl"),
+    needs: &[&GRID_UPDATE, &SEPARATION, &NODE_GATHER],
+};
+/// The walk of the gathers by subgroups.
+pub(crate) static GROUP_WALK: Module = Module {
+    name: "sim/step/group_walk",
+    text: include_str!("../../../shaders/sim/step/group_walk.wgsl"),
+    needs: &[&COMMON],
+};
+
+/// The step's modules, for the tests that tie each to its file's `// Needs:` line.
+#[cfg(test)]
+pub(crate) static MODULES: [&Module; 6] = [
+    &COMMON,
+    &GRID_UPDATE,
+    &SEPARATION,
+    &NODE_GATHER,
+    &P2G_SUMS,
+    &GROUP_WALK,
+];
+
+/// The start of every step pass's source: the library, the step's codes, the shared
+/// declarations, the registry's WGSL for the models in `used` (their codes, functions and
+/// dispatch), the grid update and separation's shared functions.
+pub(crate) fn step_source(used: &ModelsUsed) -> Source {
+    wgsl::library_source()
+        .generated(crate::sim::codes::step_wgsl())
+        .module(&COMMON)
+        .generated(crate::sim::models::wgsl_for(used))
+        .module(&GRID_UPDATE)
+        .module(&SEPARATION)
+}
+
+/// A step pass's whole source, with dispatch cases for every model.
 pub(crate) fn source(pass: &str) -> String {
     source_for(pass, &ModelsUsed::all())
 }
 
 /// As [`source`], with dispatch cases for the models in `used` only.
 pub(crate) fn source_for(pass: &str, used: &ModelsUsed) -> String {
-    [
-        crate::sim::wgsl::library().as_str(),
-        crate::sim::codes::step_wgsl().as_str(),
-        include_str!("../../../shaders/sim/step/common.wgsl"),
-        crate::sim::models::wgsl_for(used).as_str(),
-        include_str!("../../../shaders/sim/step/grid_update.wgsl"),
-        include_str!("../../../shaders/sim/step/separation.wgsl"),
-        pass,
-    ]
-    .join("\n")
+    step_source(used).pass(pass)
 }
 
-/// A node pass that gathers from the sorted particles: `node_gather.wgsl` (the cells'
-/// runs, the active blocks, the walk over the 27 base cells), then the pass.
+/// A node pass that gathers from the sorted particles: [`NODE_GATHER`], then the pass.
 fn gather_source(pass: &str) -> String {
-    [
-        include_str!("../../../shaders/sim/step/node_gather.wgsl"),
-        pass,
-    ]
-    .join("\n")
+    [NODE_GATHER.text, pass].join("\n")
 }
 
 /// A gather by subgroups' pass (`group_walk.wgsl`, then `pass`), with the placeholder
@@ -126,11 +174,7 @@ fn walk_by_subgroups(pass: &str, fields: &[(&str, Option<&str>)], call: &str) ->
         })
         .collect::<Vec<_>>()
         .join("\n        ");
-    [
-        include_str!("../../../shaders/sim/step/group_walk.wgsl"),
-        &pass.replace("LENT_BY_EACH_LANE", &lent),
-    ]
-    .join("\n")
+    [GROUP_WALK.text, &pass.replace("LENT_BY_EACH_LANE", &lent)].join("\n")
 }
 
 /// The bindings `node_gather.wgsl` declares, with the step constants and the block table
@@ -153,11 +197,10 @@ fn gather_bindings<'a>(
 /// separation compiled in or out), [`gather_source`], and `p2g_sums.wgsl` (the sums both
 /// keep per field, and how they finish a node).
 fn p2g_gather_source(pass: &str, separation: bool) -> String {
-    let sums = include_str!("../../../shaders/sim/step/p2g_sums.wgsl");
-    format!(
-        "const SEPARATION: bool = {separation};\n{}",
-        gather_source(&[sums, pass].join("\n"))
-    )
+    step_source(&ModelsUsed::all())
+        .define("SEPARATION", separation)
+        .module(&P2G_SUMS)
+        .pass(pass)
 }
 
 /// What both P2G gathers read and write besides [`gather_bindings`]: the particles' P2G
@@ -548,5 +591,33 @@ impl Passes {
                 })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gpu::wgsl::declared_needs;
+
+    /// Each shared step file names in its `// Needs:` line exactly the modules its Rust
+    /// [`Module`] includes before it, and every pass's source validates.
+    #[test]
+    fn step_modules_declare_what_they_need() {
+        for m in MODULES {
+            let listed: Vec<&str> = m.needs.iter().map(|n| n.name).collect();
+            assert_eq!(declared_needs(m.text), listed, "{}", m.name);
+        }
+        let all = ModelsUsed::all();
+        let sources = [
+            source("@compute @workgroup_size(1) fn main() {}"),
+            p2g_gather_source(include_str!("../../../shaders/sim/step/p2g.wgsl"), true),
+            step_source(&all)
+                .define("NEXT_KEYS", true)
+                .define("SEPARATION", false)
+                .pass(include_str!("../../../shaders/sim/step/g2p.wgsl")),
+        ];
+        for src in sources {
+            crate::gpu::layout_check::validated_module(&src);
+        }
     }
 }

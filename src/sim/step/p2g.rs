@@ -5,8 +5,7 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, BindAt, Bound, Extent,
-    StepPass,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, BindAt, Bound, Extent, StepPass,
 };
 
 pub(crate) struct P2gGather {
@@ -21,7 +20,7 @@ impl P2gGather {
             separation,
         );
         P2gGather {
-            kernel: step_kernel(device, "sim p2g", &src),
+            kernel: Kernel::new(device, "sim p2g", &src, "main"),
         }
     }
 }

@@ -6,8 +6,8 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, p2g_gather_bindings, p2g_gather_source, step_kernel, walk_by_subgroups,
-    BindAt, Bound, Extent, StepPass,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, walk_by_subgroups, BindAt, Bound,
+    Extent, StepPass,
 };
 
 pub(crate) struct P2gBroadcast {
@@ -34,10 +34,11 @@ impl P2gBroadcast {
             "add_lent(&near, &far, node, ridge_i, LENT, carry);",
         );
         P2gBroadcast {
-            kernel: step_kernel(
+            kernel: Kernel::new(
                 device,
                 "sim p2g broadcast",
                 &p2g_gather_source(&pass, separation),
+                "main",
             ),
         }
     }
