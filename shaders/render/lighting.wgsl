@@ -1,6 +1,6 @@
 // Shared declarations of the relighting passes (docs/method.md §8, docs/relighting.md). Mirrored by
-// `#[repr(C)]` types in src/render/gpu/lighting.rs (checked by a layout test). Concatenated
-// after shaders/common.wgsl.
+// `#[repr(C)]` types in src/render/gpu/lighting.rs (checked by a layout test).
+// Needs: common.
 
 const MAX_LIGHTS: u32 = 8u;
 

@@ -257,8 +257,7 @@ impl RigidDerive {
 
 fn source() -> String {
     crate::sim::wgsl::library_source()
-        .generated(crate::render::gpu::COMMON.to_string())
-        .generated(crate::render::gpu::lighting::LIGHTING.to_string())
+        .module(&crate::render::gpu::lighting::LIGHTING)
         .pass(include_str!("../../shaders/sim/derive.wgsl"))
 }
 

@@ -18,7 +18,6 @@ use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::wgsl::Source;
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::gpu::lighting::LIGHTING;
-use crate::render::gpu::COMMON;
 use crate::render::GpuRenderer;
 use crate::sim::wgsl;
 
@@ -57,8 +56,7 @@ const MAX_CELLS: f32 = 8.0e6;
 
 fn source(pass: &str) -> String {
     Source::new()
-        .generated(COMMON.to_string())
-        .generated(LIGHTING.to_string())
+        .module(&LIGHTING)
         .module(&wgsl::SVD)
         .generated(include_str!("../../shaders/relight/normals_common.wgsl").to_string())
         .pass(pass)

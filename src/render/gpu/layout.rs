@@ -144,7 +144,7 @@ mod tests {
 
     #[test]
     fn layouts_match_wgsl() {
-        let common = super::super::shader_source(&[super::super::COMMON]);
+        let common = super::super::COMMON.text;
         assert_layout!(
             &common,
             GaussianIn,

@@ -11,15 +11,19 @@ use wgpu::util::DeviceExt;
 
 mod passes;
 
-#[cfg(test)]
-use super::{shader_source, COMMON};
+use super::COMMON;
+use crate::gpu::wgsl::Module;
 use crate::gpu::{GpuContext, GpuError};
 use crate::relight::shadow::VolumeGrid;
 use crate::relight::{PointLight, ShadingParams, MAX_LIGHTS};
 pub(crate) use passes::FrameInputs;
 use passes::{Shade, ShadowMark, ShadowSplat, ShadowTransmit};
 
-pub(crate) const LIGHTING: &str = include_str!("../../../shaders/render/lighting.wgsl");
+pub(crate) static LIGHTING: Module = Module {
+    name: "render/lighting",
+    text: include_str!("../../../shaders/render/lighting.wgsl"),
+    needs: &[&COMMON],
+};
 
 /// `Lights` of `lighting.wgsl`.
 #[repr(C)]
@@ -192,9 +196,20 @@ mod tests {
     use super::*;
     use crate::gpu::layout_check::assert_layout;
 
+    /// The renderer's shared modules say in their `// Needs:` lines what their Rust
+    /// `Module`s include before them.
+    #[test]
+    fn render_modules_declare_what_they_need() {
+        use crate::gpu::wgsl::declared_needs;
+        for m in [&COMMON, &super::super::SH, &LIGHTING] {
+            let listed: Vec<&str> = m.needs.iter().map(|n| n.name).collect();
+            assert_eq!(declared_needs(m.text), listed, "{}", m.name);
+        }
+    }
+
     #[test]
     fn layouts_match_wgsl() {
-        let src = shader_source(&[COMMON, LIGHTING]);
+        let src = crate::gpu::wgsl::Source::new().module(&LIGHTING).pass("");
         assert_layout!(
             &src,
             LightsGpu,

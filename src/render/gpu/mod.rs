@@ -29,19 +29,25 @@ use crate::gpu::ranges::{Ranges, RangesPass};
 use crate::gpu::scan::{Scan, ScanPlan};
 use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
 use crate::gpu::stages::{self, Stage};
+use crate::gpu::wgsl::Module;
 use crate::gpu::{Executor, GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
 use lighting::{FrameInputs, Lighting, LightingSetup};
 
-pub(crate) const COMMON: &str = include_str!("../../../shaders/common.wgsl");
-pub(crate) const SH: &str = include_str!("../../../shaders/sh.wgsl");
-
-/// Concatenate WGSL parts (WGSL has no includes).
-pub(crate) fn shader_source(parts: &[&str]) -> String {
-    parts.join("\n")
-}
+/// The render passes' shared declarations (mirrored by `layout.rs`).
+pub(crate) static COMMON: Module = Module {
+    name: "common",
+    text: include_str!("../../../shaders/common.wgsl"),
+    needs: &[],
+};
+/// Real spherical harmonics.
+pub(crate) static SH: Module = Module {
+    name: "sh",
+    text: include_str!("../../../shaders/sh.wgsl"),
+    needs: &[],
+};
 
 /// A rendered frame: RGBA8, row-major, plus what the passes counted.
 #[derive(Clone, Debug)]

@@ -1,8 +1,9 @@
 //! The renderer's own passes (the sort, scan and ranges are GPU primitives in `crate::gpu`). Each type owns the
 //! pipeline(s) of one WGSL file under `shaders/render/`.
 
-use super::{shader_source, COMMON, SH};
+use super::{COMMON, SH};
 use crate::gpu::pages::wgsl_paged_reader;
+use crate::gpu::wgsl::Source;
 use crate::gpu::{Executor, GpuContext, Kernel, Shader};
 
 /// The first binding number of the projected Gaussians' pages in the passes that read
@@ -27,11 +28,10 @@ pub struct Project {
 
 impl Project {
     pub fn new(device: &wgpu::Device) -> Project {
-        let src = shader_source(&[
-            COMMON,
-            SH,
-            include_str!("../../../shaders/render/project.wgsl"),
-        ]);
+        let src = Source::new()
+            .module(&COMMON)
+            .module(&SH)
+            .pass(include_str!("../../../shaders/render/project.wgsl"));
         Project {
             kernel: Kernel::new(device, "project", &src, "main"),
         }
@@ -49,11 +49,10 @@ pub struct TileKeys {
 
 impl TileKeys {
     pub fn new(device: &wgpu::Device, pages: u32) -> TileKeys {
-        let src = shader_source(&[
-            COMMON,
-            include_str!("../../../shaders/render/tile_keys.wgsl"),
-            &projected_reader(pages),
-        ]);
+        let src = Source::new()
+            .module(&COMMON)
+            .generated(projected_reader(pages))
+            .pass(include_str!("../../../shaders/render/tile_keys.wgsl"));
         let shader = Shader::new(device, "tile_keys", &src);
         TileKeys {
             gather: shader.kernel(device, "tile_keys gather_counts", "gather_counts"),
@@ -118,14 +117,12 @@ impl Rasterize {
     /// For `executor`'s workgroup shape, with the reads that shape allows on `gpu`.
     pub fn new(gpu: &GpuContext, pages: u32, executor: Executor) -> Rasterize {
         let reads = SplatReads::for_adapter(gpu, executor);
-        let quads = format!("const QUADS: u32 = {}u;", rasterize_quads(executor));
-        let src = shader_source(&[
-            &quads,
-            COMMON,
-            include_str!("../../../shaders/render/rasterize.wgsl"),
-            reads.source(),
-            &projected_reader(pages),
-        ]);
+        let src = Source::new()
+            .define("QUADS", rasterize_quads(executor))
+            .module(&COMMON)
+            .generated(reads.source().to_string())
+            .generated(projected_reader(pages))
+            .pass(include_str!("../../../shaders/render/rasterize.wgsl"));
         Rasterize {
             kernel: Kernel::new(&gpu.device, "rasterize", &src, "main"),
         }

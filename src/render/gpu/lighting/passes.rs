@@ -8,8 +8,8 @@
 //! 3. [`ShadowTransmit`] — the transmittance along each listed voxel's ray to its light;
 //! 4. [`Shade`] — Blinn-Phong of each visible Gaussian's projected colour.
 
-use super::super::{shader_source, COMMON};
 use super::{Lighting, LIGHTING};
+use crate::gpu::wgsl::Source;
 use crate::gpu::Kernel;
 
 /// What the lighting passes read of the frame and of the uploaded Gaussians.
@@ -24,7 +24,7 @@ fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
     Kernel::new(
         device,
         label,
-        &shader_source(&[COMMON, LIGHTING, pass]),
+        &Source::new().module(&LIGHTING).pass(pass),
         "main",
     )
 }
