@@ -124,6 +124,18 @@ pub(crate) enum BenchWhat {
         #[arg(long, conflicts_with_all = ["quick", "per_pass"])]
         gaussians: Option<usize>,
     },
+    /// Moved to the lab: runs `splatter-lab suite` with the same arguments.
+    #[command(hide = true, disable_help_flag = true)]
+    Suite {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
+    /// Moved to the lab: runs `splatter-lab accuracy` with the same arguments.
+    #[command(hide = true, disable_help_flag = true)]
+    Accuracy {
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        args: Vec<String>,
+    },
     /// Seconds to read splat files of any format (the file is read from the page cache:
     /// decoding, not the disk, is measured).
     Read {

@@ -122,7 +122,39 @@ fn run(cli: Cli) -> Result<()> {
         Some(Command::Bench {
             what: BenchWhat::Read { files, repeat },
         }) => splatter::bench::read_bench(&files, repeat.max(1), &mut std::io::stdout()),
+        Some(Command::Bench {
+            what: BenchWhat::Suite { args },
+        }) => forward_to_lab(cli.backend, "suite", &args),
+        Some(Command::Bench {
+            what: BenchWhat::Accuracy { args },
+        }) => forward_to_lab(cli.backend, "accuracy", &args),
     }
+}
+
+/// `bench suite` and `bench accuracy` live in the lab now (`splatter-lab`, built next to
+/// this binary by `cargo build --release`): run it with the same arguments, so scripts
+/// written for the old commands keep working, and exit as it does.
+fn forward_to_lab(backend: Option<BackendChoice>, command: &str, args: &[String]) -> Result<()> {
+    let lab = std::env::current_exe()?
+        .with_file_name(format!("splatter-lab{}", std::env::consts::EXE_SUFFIX));
+    if !lab.is_file() {
+        anyhow::bail!(
+            "`splatter bench {command}` moved to the lab: run `splatter-lab {command}` ({} not found; `cargo build --release` builds it next to splatter)",
+            lab.display()
+        );
+    }
+    let mut cmd = std::process::Command::new(&lab);
+    if let Some(b) = backend {
+        use clap::ValueEnum;
+        let name = b.to_possible_value().map(|v| v.get_name().to_string());
+        cmd.args(["--backend", &name.unwrap_or_default()]);
+    }
+    let status = cmd
+        .arg(command)
+        .args(args)
+        .status()
+        .with_context(|| format!("cannot run {}", lab.display()))?;
+    std::process::exit(status.code().unwrap_or(1));
 }
 
 /// `splatter inspect`: the report (warnings on stderr), and with `--preview` an overview

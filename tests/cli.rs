@@ -1607,6 +1607,18 @@ fn damaged_glb_files_get_one_error_line_each() {
     }
 }
 
+/// The old `bench suite` and `bench accuracy` run the lab's commands with the same
+/// arguments (scripts written for them keep working): the lab's own refusal comes back as
+/// one error line and a non-zero exit.
+#[test]
+fn bench_accuracy_and_suite_forward_to_the_lab() {
+    let dir = tempfile::tempdir().unwrap();
+    let line = expect_error(&splatter(dir.path(), &["bench", "accuracy", "--quick"]));
+    assert_mentions(&line, &["--quick", "--out"]);
+    let line = expect_error(&splatter(dir.path(), &["bench", "suite", "--scale=0"]));
+    assert_mentions(&line, &["--scale 0", "positive"]);
+}
+
 /// `bench sim --separation` steps the NACC case with two fields: its passes include the
 /// damage field, on the gather path.
 #[test]
