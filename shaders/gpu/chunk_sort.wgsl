@@ -14,7 +14,7 @@
 // lavapipe ends an invocation's loops after 65535 iterations in all (its loop limiter), so
 // `gpu::sort` sizes the chunks and digits to stay under it: at most 32768 keys a chunk,
 // 8192 digits (13 bits) to zero, and fewer chunks than that.
-// LANES (invocations per workgroup) is prepended by `gpu::sort`.
+// LANES (invocations per workgroup) is defined by `gpu::sort`.
 
 struct ChunkSortParams {
     shift: u32,

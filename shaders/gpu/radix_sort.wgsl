@@ -5,7 +5,7 @@
 // (16 fields of 16 bits packed in two vec4<u32>) so the order of equal keys is kept.
 // Needs no subgroup operations and no float atomics, so it runs on every backend.
 // WG (invocations per workgroup) and KEYS_PER_THREAD are set per adapter by `gpu::sort`
-// (prepended constants); a block is always WG · KEYS_PER_THREAD = 2048 keys.
+// (constants `gpu::sort::source` defines); a block is always WG · KEYS_PER_THREAD = 2048 keys.
 
 struct SortParams {
     shift: u32,

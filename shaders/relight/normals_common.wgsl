@@ -3,7 +3,8 @@
 // neighbours within the radius lie in the cells up to `reach` away from a Gaussian's own
 // (fine cells: the cells searched hug the sphere of the radius more closely). Mirrored by
 // `NormalsParams` / `NormalObject` in src/relight/gpu_normals.rs (layout test).
-// Concatenated after shaders/common.wgsl, shaders/render/lighting.wgsl and the sim math.
+// Comes after shaders/common.wgsl, shaders/render/lighting.wgsl and the sim math
+// (`derive::normals::source`).
 
 struct NormalsParams {
     // xyz: grid origin, w: cell size h

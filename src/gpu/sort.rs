@@ -18,6 +18,7 @@ use wgpu::util::DeviceExt;
 use bytemuck::{Pod, Zeroable};
 
 use super::scan::{Scan, ScanPlan};
+use super::wgsl::Source;
 use super::{Executor, Kernel, Shader};
 
 /// `SortParams` of `shaders/gpu/radix_sort.wgsl`.
@@ -160,22 +161,21 @@ impl SortPlan {
     }
 }
 
-/// The block radix sort's WGSL with the workgroup shape of `executor` prepended.
+/// The block radix sort's WGSL, compiled for the workgroup shape of `executor`.
 pub fn source(executor: Executor) -> String {
     let (threads, keys_per_thread) = shape(executor);
     debug_assert_eq!(threads * keys_per_thread, BLOCK);
-    format!(
-        "const WG: u32 = {threads}u;\nconst KEYS_PER_THREAD: u32 = {keys_per_thread}u;\n{}",
-        include_str!("../../shaders/gpu/radix_sort.wgsl")
-    )
+    Source::new()
+        .define("WG", threads)
+        .define("KEYS_PER_THREAD", keys_per_thread)
+        .pass(include_str!("../../shaders/gpu/radix_sort.wgsl"))
 }
 
 /// The chunk sort's WGSL.
 pub fn chunk_source() -> String {
-    format!(
-        "const LANES: u32 = {CHUNK_LANES}u;\n{}",
-        include_str!("../../shaders/gpu/chunk_sort.wgsl")
-    )
+    Source::new()
+        .define("LANES", CHUNK_LANES)
+        .pass(include_str!("../../shaders/gpu/chunk_sort.wgsl"))
 }
 
 fn uniform(device: &wgpu::Device, bytes: &[u8]) -> wgpu::Buffer {

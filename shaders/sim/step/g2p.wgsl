@@ -19,7 +19,7 @@
 @group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, WATCH_SLOTS>;
 // What prepare.wgsl would compute for the next step, so that only the first step of a
 // submission runs it: the affine term (common.wgsl, affine_term), and on the gather path
-// (NEXT_KEYS, a constant G2p prepends) the base-cell sort key and the particle's index.
+// (NEXT_KEYS, a constant G2p defines) the base-cell sort key and the particle's index.
 @group(0) @binding(9) var<storage, read_write> affine: array<mat3x3<f32>>;
 @group(0) @binding(17) var<storage, read_write> cell_keys: array<u32>;
 @group(0) @binding(18) var<storage, read_write> cell_values: array<u32>;
@@ -87,7 +87,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let base = vec3<u32>(s.base);
     let blocks = stencil_blocks(base);
     let flip = consts.flip;
-    // SEPARATION: a constant G2p prepends (two-field separation compiled in or out)
+    // SEPARATION: a constant G2p defines (two-field separation compiled in or out)
     let two = SEPARATION;
     var gradient = vec3<f32>(0.0);
     if two {

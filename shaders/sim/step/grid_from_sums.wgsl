@@ -1,7 +1,7 @@
 // The grid update after an atomic P2G (per node of the active blocks): the scattered
 // momentum and mass become velocity and mass (grid_update.wgsl's node_velocity: gravity,
 // colliders, walls), written to the grid texture G2P reads (common.wgsl, grid_texel).
-// Nodes without mass get zero. FIXED_POINT (a constant GridFromSums prepends) says which
+// Nodes without mass get zero. FIXED_POINT (a constant GridFromSums defines) says which
 // scatter wrote the sums: p2g_fixed.wgsl's word pairs, or p2g_scatter.wgsl's floats.
 
 // Per node, for a FLIP/PIC blend twice: momentum xyz and mass w (the second time the

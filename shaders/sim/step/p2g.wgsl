@@ -17,7 +17,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let idx = bn.index;
     let node = bn.node;
     let carry = consts.flip > 0.0;
-    // SEPARATION: a constant P2gGather prepends (two-field separation compiled in or out)
+    // SEPARATION: a constant P2gGather defines (two-field separation compiled in or out)
     let two = SEPARATION;
     var ridge_i = vec3<f32>(0.0);
     if two {

@@ -1,6 +1,6 @@
 // P2G, part 2, and the grid update, gathered from the sorted particles by subgroups of
 // eight nodes (per active block; docs/method.md §2.2): the sums of p2g.wgsl, one field or
-// two (SEPARATION, a constant P2gBroadcast prepends), for CPU drivers whose subgroups are
+// two (SEPARATION, a constant P2gBroadcast defines), for CPU drivers whose subgroups are
 // 8 consecutive invocations, one SIMD vector (lavapipe with 256-bit vectors).
 //
 // The walk, and why it pays there: group_walk.wgsl. Each lane adds to its own node the
