@@ -16,13 +16,7 @@ mod cli;
 use cli::{BenchWhat, Cli, Command};
 
 fn main() -> ExitCode {
-    env_logger::Builder::from_env(
-        env_logger::Env::default()
-            .default_filter_or("warn,wgpu_core=error,wgpu_hal=error,naga=error"),
-    )
-    .format_timestamp(None)
-    .format_target(false)
-    .init();
+    splatter::run::init_logging();
     let cli = Cli::parse();
     match run(cli) {
         Ok(()) => ExitCode::SUCCESS,

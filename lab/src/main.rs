@@ -145,14 +145,7 @@ fn return_mapping(name: &str) -> Result<ReturnMapping, String> {
 }
 
 fn main() -> ExitCode {
-    // As the product: wgpu's own chatter stays quiet unless RUST_LOG asks for it.
-    env_logger::Builder::from_env(
-        env_logger::Env::default()
-            .default_filter_or("warn,wgpu_core=error,wgpu_hal=error,naga=error"),
-    )
-    .format_timestamp(None)
-    .format_target(false)
-    .init();
+    splatter::run::init_logging();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Suite(args) => suite(cli.backend, &args),

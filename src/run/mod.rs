@@ -535,6 +535,18 @@ fn check_manifest_for_resume(path: &Path, hash: u64) -> Result<()> {
     Ok(())
 }
 
+/// The command lines' logging: warnings and errors on stderr without timestamps, wgpu's
+/// and naga's own chatter only when it is an error (`RUST_LOG` overrides).
+pub fn init_logging() {
+    env_logger::Builder::from_env(
+        env_logger::Env::default()
+            .default_filter_or("warn,wgpu_core=error,wgpu_hal=error,naga=error"),
+    )
+    .format_timestamp(None)
+    .format_target(false)
+    .init();
+}
+
 /// The error and its causes on one line, leaving out a cause whose text the message already
 /// carries (our error types print their source, as wgpu's and io's errors are terse).
 pub fn one_line(e: &anyhow::Error) -> String {
