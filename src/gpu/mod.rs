@@ -8,6 +8,7 @@ mod kernel;
 pub(crate) mod layout_check;
 pub mod limits;
 pub mod pages;
+pub mod pass;
 pub mod ranges;
 pub mod scan;
 pub mod sort;

@@ -13,6 +13,16 @@ pub struct Ranges {
     pub from_starts: Kernel,
 }
 
+/// What a sort left for the ranges: its keys (at most `capacity`, their number in
+/// `key_count`) and, where it has them, each key value's first slot
+/// ([`SortPlan::key_starts`]).
+pub struct SortedKeys<'a> {
+    pub key_count: &'a wgpu::Buffer,
+    pub sorted_keys: &'a wgpu::Buffer,
+    pub key_starts: Option<&'a wgpu::Buffer>,
+    pub capacity: u32,
+}
+
 /// A bound pass writing the ranges, and its workgroups.
 pub struct RangesPass {
     bind: wgpu::BindGroup,
@@ -45,13 +55,29 @@ impl Ranges {
         capacity: u32,
         ranges: &wgpu::Buffer,
     ) -> RangesPass {
+        let keys = SortedKeys {
+            key_count,
+            sorted_keys,
+            key_starts: sort.key_starts(),
+            capacity,
+        };
+        self.after(device, &keys, ranges)
+    }
+
+    /// As [`after_sort`](Self::after_sort), from what the sort left in `keys`.
+    pub fn after(
+        &self,
+        device: &wgpu::Device,
+        keys: &SortedKeys,
+        ranges: &wgpu::Buffer,
+    ) -> RangesPass {
         let values = (ranges.size() / 8) as u32;
-        match sort.key_starts() {
+        match keys.key_starts {
             Some(starts) => RangesPass {
                 bind: self.from_starts.bind_named(
                     device,
                     &[
-                        ("key_count", key_count),
+                        ("key_count", keys.key_count),
                         ("starts", starts),
                         ("ranges", ranges),
                     ],
@@ -60,9 +86,9 @@ impl Ranges {
                 groups: values.div_ceil(256),
             },
             None => RangesPass {
-                bind: self.bind(device, key_count, sorted_keys, ranges),
+                bind: self.bind(device, keys.key_count, keys.sorted_keys, ranges),
                 from_starts: false,
-                groups: capacity.div_ceil(256),
+                groups: keys.capacity.div_ceil(256),
             },
         }
     }

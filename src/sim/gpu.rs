@@ -18,7 +18,9 @@ use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
 use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{Binds, GridTexture, Passes, Scatter, StepBuffers, GRID_TEXELS_PER_ROW};
+use super::step::{
+    Binds, Extent, GridTexture, Passes, Scatter, StepBuffers, StepPasses, GRID_TEXELS_PER_ROW,
+};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
@@ -316,8 +318,6 @@ impl GpuSim {
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
     /// Moving colliders get each substep's pose from one upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
-        let first = self.passes.list(self.num_particles, true);
-        let later = self.passes.list(self.num_particles, false);
         let poses = self.upload_poses(gpu, steps);
         let mut enc = gpu
             .device
@@ -328,21 +328,33 @@ impl GpuSim {
             if let Some(p) = &poses {
                 self.copy_poses(&mut enc, p, s);
             }
-            self.record(&mut enc, if s == 0 { &first } else { &later });
+            let which = if s == 0 {
+                StepPasses::First
+            } else {
+                StepPasses::Later
+            };
+            self.record(&mut enc, which);
         }
         gpu.queue.submit([enc.finish()]);
         self.time.set(self.time.get() + f64::from(steps) * self.dt);
         gpu.check()
     }
 
-    /// Record one step: its clears, then `passes` in one compute pass.
-    fn record(&self, enc: &mut wgpu::CommandEncoder, passes: &[usize]) {
-        self.passes.clear(enc, &self.buffers);
+    /// What the `which` passes of a step dispatch over.
+    fn extent(&self, which: StepPasses) -> Extent<'_> {
         let sizes = (self.num_particles, self.num_blocks);
-        let list = self
-            .passes
-            .stages(&self.binds, &self.buffers, passes, sizes);
-        stages::record(enc, "sim step", &list);
+        self.passes.extent(&self.binds, &self.buffers, sizes, which)
+    }
+
+    /// Record one step: its clears, then its `which` passes in one compute pass.
+    fn record(&self, enc: &mut wgpu::CommandEncoder, which: StepPasses) {
+        let at = self.extent(which);
+        self.passes.clear(enc, &at);
+        stages::record(
+            enc,
+            "sim step",
+            &self.passes.stages(&self.binds, &at, which),
+        );
     }
 
     /// Milliseconds per step of each pass, over `steps` real steps in which every pass is
@@ -355,19 +367,16 @@ impl GpuSim {
         steps: u32,
     ) -> Result<Vec<(&'static str, f64)>, GpuError> {
         // The passes of a step after the first of a submission, after one untimed prepare.
-        let passes = self.passes.list(self.num_particles, false);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        self.record(&mut enc, &self.passes.prepare_only());
+        self.record(&mut enc, StepPasses::PrepareOnly);
         gpu.queue.submit([enc.finish()]);
-        let sizes = (self.num_particles, self.num_blocks);
-        let list = self
-            .passes
-            .stages(&self.binds, &self.buffers, &passes, sizes);
+        let at = self.extent(StepPasses::Later);
+        let list = self.passes.stages(&self.binds, &at, StepPasses::Later);
         let mut total: Vec<(&'static str, f64)> = list.iter().map(|s| (s.name, 0.0)).collect();
         for _ in 0..steps {
             // The clears, untimed (as the renderer's), then each stage alone.
             let mut enc = gpu.device.create_command_encoder(&Default::default());
-            self.passes.clear(&mut enc, &self.buffers);
+            self.passes.clear(&mut enc, &at);
             gpu.queue.submit([enc.finish()]);
             for (t, (_, ms)) in total.iter_mut().zip(stages::profile(gpu, &list)?) {
                 t.1 += ms;

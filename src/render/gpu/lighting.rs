@@ -1,9 +1,9 @@
 //! Relighting on the GPU (docs/method.md §8, docs/relighting.md): the state of the
 //! shadow volume (the transmittance only of the voxels the shade pass will read) and of
-//! the Blinn-Phong shade pass; the four passes are in [`passes`] (`lighting/passes.rs`), all
-//! sharing `shaders/render/lighting.wgsl`. The renderer runs the
-//! shadow passes and the shade pass right after projecting (which culls), so the
-//! rasteriser composites shaded colours. CPU twins: [`crate::relight`].
+//! the Blinn-Phong shade pass; the passes are in [`passes`] (`lighting/passes.rs`), all
+//! sharing `shaders/render/lighting.wgsl`. The renderer runs the shadow passes and the
+//! shade pass right after projecting (which culls), so the rasteriser composites shaded
+//! colours. CPU twins: [`crate::relight`].
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -16,8 +16,7 @@ use crate::gpu::wgsl::Module;
 use crate::gpu::{GpuContext, GpuError};
 use crate::relight::shadow::VolumeGrid;
 use crate::relight::{PointLight, ShadingParams, MAX_LIGHTS};
-pub(crate) use passes::FrameInputs;
-use passes::{Shade, ShadowMark, ShadowSplat, ShadowTransmit};
+pub(crate) use passes::{Shade, Shadows};
 
 pub(crate) static LIGHTING: Module = Module {
     name: "render/lighting",
@@ -67,10 +66,8 @@ pub struct LightingSetup {
 
 /// The GPU state of relighting.
 pub(crate) struct Lighting {
+    pub shadows: Shadows,
     pub shade: Shade,
-    pub splat: ShadowSplat,
-    pub mark: ShadowMark,
-    pub transmit: ShadowTransmit,
     pub lights: wgpu::Buffer,
     pub materials: wgpu::Buffer,
     /// Per Gaussian `vec2<u32>`: packed normal, material.
@@ -144,10 +141,8 @@ impl Lighting {
             })
         };
         Ok(Lighting {
+            shadows: Shadows::new(device),
             shade: Shade::new(device),
-            splat: ShadowSplat::new(device),
-            mark: ShadowMark::new(device),
-            transmit: ShadowTransmit::new(device),
             lights: zeroed("lights", std::mem::size_of::<LightsGpu>() as u64),
             materials: init("shade materials", bytemuck::cast_slice(&materials)),
             shading: init("shading", &shading_bytes),

@@ -1,18 +1,22 @@
 //! The GPU tile rasteriser (docs/method.md §7), one WGSL file and one Rust type per pass:
 //!
 //! 1. [`passes::Project`] — project every Gaussian, SH colour, tile rectangle, depth key;
-//! 2. [`RadixSort`] — sort all Gaussians by depth (32-bit keys);
+//! 2. [`passes::DepthSort`] — sort all Gaussians by depth (32-bit keys);
 //! 3. [`passes::TileKeys`] — count, scan and emit one (tile, Gaussian) pair per touched tile,
 //!    in depth order;
-//! 4. [`RadixSort`] — stable sort of the pairs by tile (only the bits the tile count needs);
-//! 5. [`Ranges`] — start/end of each tile's run;
+//! 4. [`passes::TileSort`] — stable sort of the pairs by tile (only the bits the tile count
+//!    needs);
+//! 5. [`passes::TileRanges`] — start/end of each tile's run;
 //! 6. [`passes::Rasterize`] — front-to-back compositing per 16×16 tile.
 //!
 //! With lighting set ([`GpuRenderer::set_lighting`], [`lighting`]), the shadow volume is
-//! built before pass 1 and every visible Gaussian's colour is relit right after it.
+//! built and every visible Gaussian's colour relit right after pass 1.
 //!
-//! All passes of a frame go into one command buffer; the image and a few counters are read
-//! back at the end. Buffers are kept between frames and grown only when needed.
+//! Each pass is a [`Pass`] of the [`Render`] family (`gpu::pass`, the shape the step's
+//! passes share); [`GpuRenderer::passes`] lists them in this order. They are bound when
+//! the buffers change, and all passes of a frame go into one command buffer; the image and
+//! a few counters are read back at the end. Buffers are kept between frames and grown only
+//! when needed.
 
 mod buffers;
 pub mod layout;
@@ -20,21 +24,24 @@ pub mod lighting;
 pub(crate) mod passes;
 mod state;
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 pub use crate::gpu::buffers::read_buffer;
 use crate::gpu::buffers::storage;
-use crate::gpu::pages::{page_var, PageRanges, Pages};
-use crate::gpu::ranges::{Ranges, RangesPass};
-use crate::gpu::scan::{Scan, ScanPlan};
-use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
-use crate::gpu::stages::{self, Stage};
+use crate::gpu::pages::{PageRanges, Pages};
+use crate::gpu::pass::{bind_in_order, clear_all, Bound, Family, Pass};
+use crate::gpu::ranges::Ranges;
+use crate::gpu::scan::Scan;
+use crate::gpu::sort::RadixSort;
+use crate::gpu::stages;
 use crate::gpu::wgsl::Module;
 use crate::gpu::{Executor, GpuContext, GpuError};
 use crate::relight::PointLight;
 use crate::render::{Camera, Splats};
 use layout::{Frame, GaussianIn, Stats, SH_WORDS, TILE};
-use lighting::{FrameInputs, Lighting, LightingSetup};
+use lighting::{Lighting, LightingSetup};
 
 /// The render passes' shared declarations (mirrored by `layout.rs`).
 pub(crate) static COMMON: Module = Module {
@@ -48,6 +55,81 @@ pub(crate) static SH: Module = Module {
     text: include_str!("../../../shaders/sh.wgsl"),
     needs: &[],
 };
+
+/// The family of the renderer's passes.
+pub(crate) struct Render;
+
+impl Family for Render {
+    type Inputs<'a> = FrameInputs<'a>;
+    type Extent<'a> = FrameExtent<'a>;
+}
+
+/// What a render pass binds over.
+pub(crate) struct FrameInputs<'a> {
+    /// The frame's constants (`Frame` of `common.wgsl`).
+    pub frame: &'a wgpu::Buffer,
+    /// The frame's counters (`Stats`).
+    pub stats: &'a wgpu::Buffer,
+    pub s: &'a SplatBuffers,
+    pub f: &'a FrameBuffers,
+    pub lighting: Option<&'a Lighting>,
+    /// Where the depth sort leaves the Gaussians' order, once it is bound.
+    pub depth_order: Option<&'a wgpu::Buffer>,
+    /// Where the tile sort leaves the pairs, once it is bound.
+    pub tile_pairs: Option<TilePairs<'a>>,
+}
+
+/// The (tile, Gaussian) pairs as the tile sort leaves them.
+pub(crate) struct TilePairs<'a> {
+    pub keys: &'a wgpu::Buffer,
+    pub values: &'a wgpu::Buffer,
+    /// Each tile's first slot, where the sort keeps them (`SortPlan::key_starts`).
+    pub key_starts: Option<wgpu::Buffer>,
+}
+
+impl<'a> FrameInputs<'a> {
+    pub fn depth_order(&self) -> &'a wgpu::Buffer {
+        self.depth_order
+            .expect("a pass that reads the depth order is bound before the depth sort")
+    }
+
+    pub fn tile_pairs(&self) -> &TilePairs<'a> {
+        self.tile_pairs
+            .as_ref()
+            .expect("a pass that reads the sorted pairs is bound before the tile sort")
+    }
+
+    pub fn lighting(&self) -> &'a Lighting {
+        self.lighting.expect("a lighting pass without lighting")
+    }
+
+    /// The projections' page windows, in page order.
+    pub fn projected(&self) -> Vec<wgpu::BufferBinding<'a>> {
+        let pages = &self.s.pages.pages;
+        (0..pages.count)
+            .map(|i| pages.window(&self.s.projected, i, PROJECTED_BYTES))
+            .collect()
+    }
+}
+
+/// What a render pass dispatches over.
+pub(crate) struct FrameExtent<'a> {
+    /// The frame's counters.
+    pub stats: &'a wgpu::Buffer,
+    pub s: &'a SplatBuffers,
+    pub f: &'a FrameBuffers,
+    pub lighting: Option<&'a Lighting>,
+    /// Gaussians uploaded.
+    pub count: u32,
+    /// Tiles across and down.
+    pub tiles: (u32, u32),
+}
+
+impl<'a> FrameExtent<'a> {
+    pub fn lighting(&self) -> &'a Lighting {
+        self.lighting.expect("a lighting pass without lighting")
+    }
+}
 
 /// A rendered frame: RGBA8, row-major, plus what the passes counted.
 #[derive(Clone, Debug)]
@@ -72,7 +154,7 @@ pub struct FrameTimings {
 }
 
 /// Buffers that depend on the number of Gaussians.
-struct SplatBuffers {
+pub(crate) struct SplatBuffers {
     count: u32,
     sh_degree: u32,
     gaussians: wgpu::Buffer,
@@ -91,7 +173,7 @@ struct SplatBuffers {
 }
 
 /// Buffers that depend on the image size and the tile-pair capacity.
-struct FrameBuffers {
+pub(crate) struct FrameBuffers {
     width: u32,
     height: u32,
     capacity: u32,
@@ -106,32 +188,19 @@ struct FrameBuffers {
     stats_readback: wgpu::Buffer,
 }
 
-/// Bind groups and sort/scan plans for the current buffers.
-struct Plans {
-    /// One per page of the Gaussians.
-    project: Vec<wgpu::BindGroup>,
-    depth_sort: SortPlan,
-    gather: wgpu::BindGroup,
-    offsets_scan: ScanPlan,
-    total: wgpu::BindGroup,
-    emit: wgpu::BindGroup,
-    tile_sort: SortPlan,
-    ranges: RangesPass,
-    rasterize: wgpu::BindGroup,
-}
-
 pub struct GpuRenderer {
     project: passes::Project,
+    depth_sort: passes::DepthSort,
     tile_keys: passes::TileKeys,
-    tile_ranges: Ranges,
+    tile_sort: passes::TileSort,
+    tile_ranges: passes::TileRanges,
     rasterize: passes::Rasterize,
-    sort: RadixSort,
-    scan: Scan,
     frame: wgpu::Buffer,
     stats: wgpu::Buffer,
     splats: Option<SplatBuffers>,
     frame_buffers: Option<FrameBuffers>,
-    plans: Option<Plans>,
+    /// The bind groups of [`passes`](Self::passes) over the current buffers, one per pass.
+    bound: Option<Vec<Bound>>,
     warned: WarnedOnce,
     /// Upper bound on the tile pairs of a frame, below what the adapter allows.
     pair_limit: Option<u32>,
@@ -181,30 +250,6 @@ fn too_many_pages_for(what: &'static str, gpu: &GpuContext, pages: Pages) -> Gpu
     }
 }
 
-/// Bind `buffers` by name and the projections' pages as `projected_0`, `projected_1`, …
-/// (the names [`passes::projected_reader`] declares).
-fn bind_with_pages(
-    kernel: &crate::gpu::Kernel,
-    device: &wgpu::Device,
-    buffers: &[(&str, &wgpu::Buffer)],
-    projected: &[wgpu::BufferBinding],
-) -> wgpu::BindGroup {
-    let names: Vec<String> = (0..projected.len() as u32)
-        .map(|k| page_var("projected", k))
-        .collect();
-    let mut parts: Vec<(&str, wgpu::BufferBinding)> = buffers
-        .iter()
-        .map(|(name, b)| (*name, b.as_entire_buffer_binding()))
-        .collect();
-    parts.extend(
-        names
-            .iter()
-            .map(String::as_str)
-            .zip(projected.iter().cloned()),
-    );
-    kernel.bind_named_parts(device, &parts)
-}
-
 fn tile_bits(tiles: u32) -> u32 {
     32 - tiles.saturating_sub(1).leading_zeros()
 }
@@ -218,13 +263,18 @@ impl GpuRenderer {
     /// (the images are the same; tests check that on one adapter).
     pub fn with_executor(gpu: &GpuContext, executor: Executor) -> GpuRenderer {
         let device = &gpu.device;
+        let sort = Arc::new(RadixSort::new(device, executor));
+        let scan = Arc::new(Scan::new(device));
         GpuRenderer {
             project: passes::Project::new(device),
-            tile_keys: passes::TileKeys::new(device, 1),
-            tile_ranges: Ranges::new(device),
+            depth_sort: passes::DepthSort {
+                sort: sort.clone(),
+                scan: scan.clone(),
+            },
+            tile_keys: passes::TileKeys::new(device, 1, scan.clone()),
+            tile_sort: passes::TileSort { sort, scan },
+            tile_ranges: passes::TileRanges(Ranges::new(device)),
             rasterize: passes::Rasterize::new(gpu, 1, executor),
-            sort: RadixSort::new(device, executor),
-            scan: Scan::new(device),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame"),
                 size: std::mem::size_of::<Frame>() as u64,
@@ -239,7 +289,7 @@ impl GpuRenderer {
             ),
             splats: None,
             frame_buffers: None,
-            plans: None,
+            bound: None,
             warned: WarnedOnce::default(),
             pair_limit: None,
             page_limit: None,
@@ -304,7 +354,7 @@ impl GpuRenderer {
         capacity = capacity.min(max_capacity);
         loop {
             self.ensure_frame_buffers(gpu, camera.width, camera.height, capacity)?;
-            self.ensure_plans(gpu);
+            self.ensure_bound(gpu);
             let (image, timings) = self.render_once(gpu, camera, background)?;
             let wanted = image.stats.intersections;
             let cap = self.frame_buffers.as_ref().map_or(0, |f| f.capacity);
@@ -345,8 +395,42 @@ impl GpuRenderer {
         }
     }
 
-    // Over 80 lines on purpose: the frame's passes recorded in order into one encoder; turning
-    // them into pass types like the step's is the planned change.
+    /// The passes of a frame, in order (the module's documentation).
+    fn passes(&self) -> Vec<&dyn Pass<Render>> {
+        let mut list: Vec<&dyn Pass<Render>> = vec![&self.project];
+        if let Some(l) = &self.lighting {
+            if l.grid.is_some() {
+                list.push(&l.shadows);
+            }
+            list.push(&l.shade);
+        }
+        list.extend([
+            &self.depth_sort as &dyn Pass<Render>,
+            &self.tile_keys,
+            &self.tile_sort,
+            &self.tile_ranges,
+            &self.rasterize,
+        ]);
+        list
+    }
+
+    /// Bind the passes over the current buffers, unless they are bound.
+    fn ensure_bound(&mut self, gpu: &GpuContext) {
+        if self.bound.is_some() {
+            return;
+        }
+        let inputs = FrameInputs {
+            frame: &self.frame,
+            stats: &self.stats,
+            s: self.splats.as_ref().expect("upload() before render()"),
+            f: self.frame_buffers.as_ref().expect("frame buffers"),
+            lighting: self.lighting.as_ref(),
+            depth_order: None,
+            tile_pairs: None,
+        };
+        self.bound = Some(bind_in_order(&self.passes(), &gpu.device, inputs));
+    }
+
     fn render_once(
         &self,
         gpu: &GpuContext,
@@ -356,93 +440,37 @@ impl GpuRenderer {
         let start = std::time::Instant::now();
         let s = self.splats.as_ref().expect("upload() before render()");
         let f = self.frame_buffers.as_ref().expect("frame buffers");
-        let p = self.plans.as_ref().expect("plans");
+        let bound = self.bound.as_ref().expect("bound passes");
         let mut frame = Frame::new(camera, background, s.count, s.sh_degree, f.capacity);
         frame.page_shift = s.pages.pages.shift();
         gpu.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
-        let groups = s.count.div_ceil(256);
-        // The frame's stages, in order. All go into one compute pass (each dispatch is its
-        // own synchronisation scope) unless passes are profiled one by one.
-        let inputs = FrameInputs {
-            frame: &self.frame,
-            gaussians: &s.gaussians,
-            depth_keys: &s.depth_keys,
-            projected: &s.projected,
-        };
-        let light_binds = self
-            .lighting
-            .as_ref()
-            .filter(|_| s.count > 0)
-            .map(|l| l.binds(&gpu.device, &inputs));
-        let mut stages: Vec<Stage> = Vec::new();
         if let Some(l) = &self.lighting {
             gpu.queue
                 .write_buffer(&l.lights, 0, bytemuck::bytes_of(&l.uniforms()));
         }
-        if s.count > 0 {
-            stages.push(Stage::new("project", |c| {
-                for (i, bind) in (0..).zip(&p.project) {
-                    let (_, n) = s.pages.pages.range(i);
-                    self.project.kernel.dispatch(c, bind, n.div_ceil(256));
-                }
-            }));
-        }
-        if let (Some(l), Some(b)) = (&self.lighting, &light_binds) {
-            if l.grid.is_some() {
-                // After the projection, which culls: only what is shaded asks for shadows.
-                stages.push(Stage::new("shadows", move |c| {
-                    l.splat.record(c, &b.splat, s.count);
-                    l.mark.record(c, &b.mark, s.count);
-                    l.transmit.record(c, &b.transmit, l);
-                }));
-            }
-            stages.push(Stage::new("shade", move |c| {
-                l.shade.record(c, &b.shade, s.count)
-            }));
-        }
-        if s.count > 0 {
-            stages.push(Stage::new("depth sort", |c| {
-                self.sort.record(c, &self.scan, &p.depth_sort)
-            }));
-            stages.push(Stage::new("tile keys", |c| {
-                self.tile_keys.gather.dispatch(c, &p.gather, groups);
-                self.scan.record(c, &p.offsets_scan);
-                self.tile_keys.total.dispatch(c, &p.total, 1);
-                self.tile_keys.emit.dispatch(c, &p.emit, groups);
-            }));
-            stages.push(Stage::new("tile sort", |c| {
-                self.sort.record(c, &self.scan, &p.tile_sort)
-            }));
-            stages.push(Stage::new("tile ranges", |c| {
-                self.tile_ranges.record(c, &p.ranges)
-            }));
-        }
-        stages.push(Stage::new("rasterize", |c| {
-            self.rasterize
-                .kernel
-                .dispatch_2d(c, &p.rasterize, frame.tiles_x, frame.tiles_y)
-        }));
-
+        let at = FrameExtent {
+            stats: &self.stats,
+            s,
+            f,
+            lighting: self.lighting.as_ref(),
+            count: s.count,
+            tiles: (frame.tiles_x, frame.tiles_y),
+        };
+        let passes = self.passes();
+        let stages = crate::gpu::pass::stages(&passes, bound, &at, |_| true);
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("render"),
             });
-        enc.clear_buffer(&self.stats, 0, None);
-        enc.clear_buffer(&f.ranges, 0, None);
-        if let Some(l) = self.lighting.as_ref().filter(|l| l.grid.is_some()) {
-            enc.clear_buffer(&l.depth, 0, None);
-            enc.clear_buffer(&l.asked, 0, None);
-            enc.clear_buffer(&l.transmit_args, 0, None);
-        }
-        if s.count == 0 {
-            enc.clear_buffer(&f.key_count, 0, None);
-        }
-        let mut passes = Vec::new();
+        clear_all(&passes, &mut enc, &at);
+        // All stages go into one compute pass (each dispatch is its own synchronisation
+        // scope) unless passes are profiled one by one.
+        let mut timed = Vec::new();
         if self.profile {
             gpu.queue.submit([enc.finish()]);
-            passes = stages::profile(gpu, &stages)?;
+            timed = stages::profile(gpu, &stages)?;
         } else {
             stages::record(&mut enc, "render", &stages);
             gpu.queue.submit([enc.finish()]);
@@ -464,7 +492,7 @@ impl GpuRenderer {
             FrameTimings {
                 render_ms,
                 readback_ms,
-                passes,
+                passes: timed,
             },
         ))
     }

@@ -34,6 +34,8 @@ impl GpuRenderer {
             )));
         }
         self.lighting = Some(Lighting::new(gpu, setup)?);
+        // The lighting passes join the frame's: bind them all again.
+        self.bound = None;
         Ok(())
     }
 
@@ -107,7 +109,8 @@ impl GpuRenderer {
         }
         if self.tile_keys.pages != pages.count {
             // The passes that read projections in any order declare one binding per page.
-            self.tile_keys = passes::TileKeys::new(&gpu.device, pages.count);
+            self.tile_keys =
+                passes::TileKeys::new(&gpu.device, pages.count, self.tile_keys.scan.clone());
             self.rasterize = passes::Rasterize::new(gpu, pages.count, self.executor);
         }
         let device = &gpu.device;
@@ -135,7 +138,7 @@ impl GpuRenderer {
         gpu.queue
             .write_buffer(&b.depth_count, 0, bytemuck::bytes_of(&(n as u32)));
         self.splats = Some(b);
-        self.plans = None;
+        self.bound = None;
         Ok(())
     }
 

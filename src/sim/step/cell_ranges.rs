@@ -3,7 +3,7 @@
 
 use crate::gpu::ranges::Ranges;
 
-use super::{BindAt, Bound, Extent, StepPass};
+use super::{BindAt, Bound, Extent, Pass, Step};
 
 pub(crate) struct CellRanges {
     ranges: Ranges,
@@ -17,17 +17,22 @@ impl CellRanges {
     }
 }
 
-impl StepPass for CellRanges {
+impl Pass<Step> for CellRanges {
     fn name(&self) -> &'static str {
         "cell ranges"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         let b = at.b;
         Bound::Whole(
             self.ranges
                 .bind(device, &b.key_count, at.sorted().keys, &b.ranges),
         )
+    }
+
+    /// Cells no particle reaches keep an empty run.
+    fn clear(&self, enc: &mut wgpu::CommandEncoder, at: &Extent) {
+        enc.clear_buffer(&at.b.ranges, 0, None);
     }
 
     /// One invocation per sorted particle.

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
+use super::{step_kernel, BindAt, Bound, Extent, Pass, Step, StepBuffers};
 
 pub(crate) struct CompactBlocks {
     kernel: Kernel,
@@ -32,13 +32,18 @@ impl CompactBlocks {
     }
 }
 
-impl StepPass for CompactBlocks {
+impl Pass<Step> for CompactBlocks {
     fn name(&self) -> &'static str {
         "compact blocks"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b))
+    }
+
+    /// The active-block count it adds to.
+    fn clear(&self, enc: &mut wgpu::CommandEncoder, at: &Extent) {
+        enc.clear_buffer(&at.b.block_args, 0, None);
     }
 
     /// One invocation per block of the domain.

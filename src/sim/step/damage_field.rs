@@ -8,7 +8,7 @@ use crate::sim::models::ModelsUsed;
 
 use super::{
     gather_bindings, gather_source, material_kernel, walk_by_subgroups, BindAt, Bound, Extent,
-    Sorted, StepBuffers, StepPass,
+    Pass, Sorted, Step, StepBuffers,
 };
 
 pub(crate) struct DamageField {
@@ -50,12 +50,12 @@ impl DamageField {
     }
 }
 
-impl StepPass for DamageField {
+impl Pass<Step> for DamageField {
     fn name(&self) -> &'static str {
         "damage field"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b, at.sorted()))
     }
 

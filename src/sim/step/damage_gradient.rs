@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass};
+use super::{step_kernel, BindAt, Bound, Extent, Pass, Step, StepBuffers};
 
 pub(crate) struct DamageGradient {
     kernel: Kernel,
@@ -33,12 +33,12 @@ impl DamageGradient {
     }
 }
 
-impl StepPass for DamageGradient {
+impl Pass<Step> for DamageGradient {
     fn name(&self) -> &'static str {
         "damage gradient"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b))
     }
 

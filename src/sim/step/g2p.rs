@@ -6,7 +6,7 @@
 use crate::gpu::Kernel;
 use crate::sim::models::ModelsUsed;
 
-use super::{BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
+use super::{pages, per_page, BindAt, Bound, Extent, Pass, Step, StepBuffers, MAT3, SCALAR, VEC4};
 
 pub(crate) struct G2p {
     kernel: Kernel,
@@ -64,18 +64,18 @@ impl G2p {
     }
 }
 
-impl StepPass for G2p {
+impl Pass<Step> for G2p {
     fn name(&self) -> &'static str {
         "g2p"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
-        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
+        per_page(at.b, |i| self.bind_page(device, at.b, i))
     }
 
     /// One invocation per particle of the page.
     fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
-        for (bind, n) in bound.pages(at) {
+        for (bind, n) in pages(bound, at) {
             self.kernel.dispatch(c, bind, n.div_ceil(256));
         }
     }

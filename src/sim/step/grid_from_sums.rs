@@ -4,7 +4,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{BindAt, Bound, Extent, StepBuffers, StepPass};
+use super::{BindAt, Bound, Extent, Pass, Step, StepBuffers};
 
 pub(crate) struct GridFromSums {
     kernel: Kernel,
@@ -40,12 +40,12 @@ impl GridFromSums {
     }
 }
 
-impl StepPass for GridFromSums {
+impl Pass<Step> for GridFromSums {
     fn name(&self) -> &'static str {
         "grid from sums"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b))
     }
 

@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers, StepPass};
+use super::{step_kernel, BindAt, Bound, Extent, Pass, Sorted, Step, StepBuffers};
 
 pub(crate) struct MarkBlocks {
     kernel: Kernel,
@@ -34,12 +34,12 @@ impl MarkBlocks {
     }
 }
 
-impl StepPass for MarkBlocks {
+impl Pass<Step> for MarkBlocks {
     fn name(&self) -> &'static str {
         "mark blocks"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b, at.sorted()))
     }
 

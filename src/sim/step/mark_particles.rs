@@ -3,7 +3,7 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, VEC4};
+use super::{pages, per_page, step_kernel, BindAt, Bound, Extent, Pass, Step, StepBuffers, VEC4};
 
 pub(crate) struct MarkParticles {
     kernel: Kernel,
@@ -31,18 +31,18 @@ impl MarkParticles {
     }
 }
 
-impl StepPass for MarkParticles {
+impl Pass<Step> for MarkParticles {
     fn name(&self) -> &'static str {
         "mark blocks (particles)"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
-        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
+        per_page(at.b, |i| self.bind_page(device, at.b, i))
     }
 
     /// One invocation per particle of the page.
     fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
-        for (bind, n) in bound.pages(at) {
+        for (bind, n) in pages(bound, at) {
             self.kernel.dispatch(c, bind, n.div_ceil(256));
         }
     }

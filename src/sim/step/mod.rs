@@ -29,11 +29,11 @@
 //! leaves the next step's affine term (and on the gather path its sort keys), so later
 //! steps need not re-read F, C and the material for it.
 //!
-//! Each pass is a [`StepPass`] (`pass.rs`): its name, its bind groups over [`StepBuffers`]
-//! and its dispatches. [`Passes::new`] lists a path's passes in this order, and
-//! [`Passes::stages`] records them through the same named stages the renderer uses
-//! (`gpu::stages`). A new pass is its file, its `mod` and `use` lines and its line in
-//! [`Passes::new`].
+//! Each pass is a [`Pass`] of the [`Step`] family (`gpu::pass`, the shape the renderer's
+//! passes share): its name, its bind groups over [`StepBuffers`], what it clears and its
+//! dispatches. [`Passes::new`] lists a path's passes in this order, and [`Passes::stages`]
+//! records them through the same named stages the renderer uses (`gpu::stages`). A new
+//! pass is its file, its `mod` and `use` lines and its line in [`Passes::new`].
 
 mod cell_ranges;
 mod compact_blocks;
@@ -54,6 +54,7 @@ mod ridge;
 mod sort_cells;
 mod sources;
 
+pub(crate) use crate::gpu::pass::{Bound, Pass};
 pub(crate) use cell_ranges::CellRanges;
 pub(crate) use compact_blocks::CompactBlocks;
 pub(crate) use damage_field::DamageField;
@@ -66,7 +67,7 @@ pub(crate) use p2g::P2gGather;
 pub(crate) use p2g_broadcast::P2gBroadcast;
 pub(crate) use p2g_fixed::P2gFixed;
 pub(crate) use p2g_scatter::P2gScatter;
-pub(crate) use pass::{BindAt, Bound, Extent, StepPass};
+pub(crate) use pass::{pages, per_page, BindAt, Extent, Step};
 pub(crate) use prepare::Prepare;
 pub(crate) use ridge::Ridge;
 pub(crate) use sort_cells::SortCells;
@@ -74,6 +75,7 @@ pub(crate) use sources::{source, source_for, step_source};
 use sources::{GROUP_WALK, NODE_GATHER, P2G_SUMS};
 
 use crate::gpu::pages::PageRanges;
+use crate::gpu::pass::{bind_in_order, clear_all};
 use crate::gpu::sort::SortPlan;
 use crate::gpu::stages::Stage;
 use crate::gpu::{GpuContext, Kernel};
@@ -369,9 +371,7 @@ impl<'a> Sorted<'a> {
 
 /// The passes of one path of the step, in the order a step runs them.
 pub(crate) struct Passes {
-    passes: Vec<Box<dyn StepPass>>,
-    /// The scatter path's (its grid is the sums, cleared each step), else the gather's.
-    scatter: bool,
+    passes: Vec<Box<dyn Pass<Step>>>,
 }
 
 /// How a scatter path's particles add to their nodes.
@@ -390,8 +390,17 @@ pub(crate) struct Binds {
     page_counts: Vec<u32>,
 }
 
-/// Which passes of [`Passes`] a step records, by position.
-pub(crate) type PassList = Vec<usize>;
+/// Which passes of a step [`Passes::stages`] records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum StepPasses {
+    /// Those of the first step of a submission.
+    First,
+    /// Those of a later step.
+    Later,
+    /// [`Prepare`] alone (the first pass): the affine term and keys a step after the
+    /// first of a submission reads from the step before.
+    PrepareOnly,
+}
 
 impl Passes {
     /// Compile the passes; a scatter path's with `scatter` (else the gather path's),
@@ -405,7 +414,7 @@ impl Passes {
         let device = &gpu.device;
         let executor = gpu.executor();
         let atomic = scatter.is_some();
-        let mut passes: Vec<Box<dyn StepPass>> = vec![Box::new(Prepare::new(device, used))];
+        let mut passes: Vec<Box<dyn Pass<Step>>> = vec![Box::new(Prepare::new(device, used))];
         match scatter {
             Some(scatter) => {
                 passes.push(Box::new(MarkParticles::new(device)));
@@ -438,87 +447,66 @@ impl Passes {
             }
         }
         passes.push(Box::new(G2p::new(device, (!atomic, separation), used)));
-        Passes {
-            passes,
-            scatter: atomic,
-        }
+        Passes { passes }
+    }
+
+    fn list(&self) -> Vec<&dyn Pass<Step>> {
+        self.passes.iter().map(|p| p.as_ref()).collect()
     }
 
     /// Bind every pass to `b`, in step order (a pass after the sort finds the sorted
     /// pairs), for `n` particles sorted (on the gather path) by keys of `sort_bits` bits.
     pub fn bind(&self, device: &wgpu::Device, b: &StepBuffers, n: u32, sort_bits: u32) -> Binds {
-        let mut at = BindAt {
+        let at = BindAt {
             b,
             sorted: None,
             particles: n,
             sort_bits,
         };
-        let mut bound = Vec::with_capacity(self.passes.len());
-        for pass in &self.passes {
-            let binds = pass.bind(device, &at);
-            if let Bound::Sort(plan) = &binds {
-                at.sorted = Some(Sorted::after(b, plan));
-            }
-            bound.push(binds);
-        }
         Binds {
-            bound,
+            bound: bind_in_order(&self.list(), device, at),
             page_counts: (0..b.pages.pages.count)
                 .map(|i| b.pages.pages.range(i).1)
                 .collect(),
         }
     }
 
-    /// The passes of one step, in order; `first`: the first step of a submission.
-    pub fn list(&self, particles: u32, first: bool) -> PassList {
-        if particles == 0 {
-            // Nothing reaches the grid, and there is nothing to move.
-            return Vec::new();
+    /// What the `which` passes dispatch over: `particles` particles on a domain of
+    /// `blocks` blocks.
+    pub fn extent<'a>(
+        &self,
+        binds: &'a Binds,
+        b: &'a StepBuffers,
+        (particles, blocks): (u32, u32),
+        which: StepPasses,
+    ) -> Extent<'a> {
+        Extent {
+            b,
+            particles,
+            blocks,
+            page_counts: &binds.page_counts,
+            first: which != StepPasses::Later,
         }
-        (0..self.passes.len())
-            .filter(|&i| self.passes[i].runs(first))
-            .collect()
-    }
-
-    /// [`Prepare`] alone (the first pass): the affine term and keys a step after the
-    /// first of a submission reads from the step before.
-    pub fn prepare_only(&self) -> PassList {
-        vec![0]
     }
 
     /// The buffer clears a step starts with (outside any compute pass).
-    pub fn clear(&self, enc: &mut wgpu::CommandEncoder, b: &StepBuffers) {
-        if self.scatter {
-            enc.clear_buffer(&b.grid, 0, None);
-        } else {
-            enc.clear_buffer(&b.ranges, 0, None);
-        }
-        enc.clear_buffer(&b.block_args, 0, None);
+    pub fn clear(&self, enc: &mut wgpu::CommandEncoder, at: &Extent) {
+        clear_all(&self.list(), enc, at);
     }
 
-    /// The dispatches of `passes` as named stages, for `particles` particles on a domain
-    /// of `blocks` blocks.
+    /// The dispatches of the step's `which` passes as named stages.
     pub fn stages<'a>(
         &'a self,
         binds: &'a Binds,
-        b: &'a StepBuffers,
-        passes: &[usize],
-        (particles, blocks): (u32, u32),
+        at: &'a Extent<'a>,
+        which: StepPasses,
     ) -> Vec<Stage<'a>> {
-        passes
-            .iter()
-            .map(|&i| {
-                let pass = &self.passes[i];
-                Stage::new(pass.name(), move |c: &mut wgpu::ComputePass| {
-                    let at = Extent {
-                        b,
-                        particles,
-                        blocks,
-                        page_counts: &binds.page_counts,
-                    };
-                    pass.record(c, &binds.bound[i], &at);
-                })
-            })
-            .collect()
+        if at.particles == 0 {
+            // Nothing reaches the grid, and there is nothing to move.
+            return Vec::new();
+        }
+        crate::gpu::pass::stages(&self.list(), &binds.bound, at, |i| {
+            which != StepPasses::PrepareOnly || i == 0
+        })
     }
 }

@@ -5,7 +5,7 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, p2g_gather_bindings, p2g_gather_source, BindAt, Bound, Extent, StepPass,
+    gather_bindings, p2g_gather_bindings, p2g_gather_source, BindAt, Bound, Extent, Pass, Step,
 };
 
 pub(crate) struct P2gGather {
@@ -25,12 +25,12 @@ impl P2gGather {
     }
 }
 
-impl StepPass for P2gGather {
+impl Pass<Step> for P2gGather {
     fn name(&self) -> &'static str {
         "p2g gather + grid"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         let all: Vec<_> = gather_bindings(at.b, at.sorted())
             .into_iter()
             .chain(p2g_gather_bindings(at.b))

@@ -7,7 +7,7 @@ use crate::gpu::Kernel;
 
 use super::{
     gather_bindings, p2g_gather_bindings, p2g_gather_source, walk_by_subgroups, BindAt, Bound,
-    Extent, StepPass,
+    Extent, Pass, Step,
 };
 
 pub(crate) struct P2gBroadcast {
@@ -44,12 +44,12 @@ impl P2gBroadcast {
     }
 }
 
-impl StepPass for P2gBroadcast {
+impl Pass<Step> for P2gBroadcast {
     fn name(&self) -> &'static str {
         "p2g gather + grid"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         let b = at.b;
         let all: Vec<_> = gather_bindings(b, at.sorted())
             .into_iter()

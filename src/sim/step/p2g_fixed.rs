@@ -3,7 +3,9 @@
 
 use crate::gpu::Kernel;
 
-use super::{step_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, VEC4};
+use super::{
+    pages, per_page, step_kernel, BindAt, Bound, Extent, Pass, Step, StepBuffers, MAT3, VEC4,
+};
 
 pub(crate) struct P2gFixed {
     kernel: Kernel,
@@ -35,18 +37,23 @@ impl P2gFixed {
     }
 }
 
-impl StepPass for P2gFixed {
+impl Pass<Step> for P2gFixed {
     fn name(&self) -> &'static str {
         "p2g scatter"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
-        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
+        per_page(at.b, |i| self.bind_page(device, at.b, i))
+    }
+
+    /// The grid's fixed-point sums it adds to.
+    fn clear(&self, enc: &mut wgpu::CommandEncoder, at: &Extent) {
+        enc.clear_buffer(&at.b.grid, 0, None);
     }
 
     /// One invocation per particle of the page.
     fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
-        for (bind, n) in bound.pages(at) {
+        for (bind, n) in pages(bound, at) {
             self.kernel.dispatch(c, bind, n.div_ceil(256));
         }
     }

@@ -1,29 +1,18 @@
-//! What a pass of the step is to the step: a name (for timings), its bind groups over the
-//! step's buffers, and its dispatches. [`super::Passes`] holds the passes of a path in
-//! order as `Box<dyn StepPass>`, binds them in that order and records them as stages, so a
-//! new pass is its own file and one line in `Passes::new`.
+//! The step as a family of GPU passes (`gpu::pass`): what its passes bind over (the step's
+//! buffers, and where the sort left the sorted pairs) and what they dispatch over.
+//! [`super::Passes`] holds a path's passes in order, so a new pass is its own file and one
+//! line in `Passes::new`.
 
-use crate::gpu::sort::SortPlan;
+use crate::gpu::pass::{Bound, Family};
 
 use super::{Sorted, StepBuffers};
 
-/// One pass of the step.
-pub(crate) trait StepPass {
-    /// Its name in per-pass timings.
-    fn name(&self) -> &'static str;
+/// The family of the step's passes.
+pub(crate) struct Step;
 
-    /// Its bind groups over `at`'s buffers (per page of the particles for a per-particle
-    /// pass that reads them in order).
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound;
-
-    /// Record its dispatches over `bound` (what [`bind`](Self::bind) made) for `at`.
-    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent);
-
-    /// Whether it runs in a step of a submission: `first`, the first. Every pass runs in
-    /// every step except the scatter path's [`super::Prepare`].
-    fn runs(&self, _first: bool) -> bool {
-        true
-    }
+impl Family for Step {
+    type Inputs<'a> = BindAt<'a>;
+    type Extent<'a> = Extent<'a>;
 }
 
 /// What a pass binds over: the step's buffers and, once the sort has been bound (the
@@ -53,47 +42,19 @@ pub(crate) struct Extent<'a> {
     pub blocks: u32,
     /// Particles of each page.
     pub page_counts: &'a [u32],
+    /// The first step of a submission (the only one that runs [`super::Prepare`]).
+    pub first: bool,
 }
 
-/// A pass's bind groups.
-pub(crate) enum Bound {
-    /// One bind group over whole buffers.
-    Whole(wgpu::BindGroup),
-    /// One per page of the particles (`gpu::pages`).
-    Pages(Vec<wgpu::BindGroup>),
-    /// The radix sort's plan (its passes' bind groups and buffers).
-    Sort(SortPlan),
+/// A bind group per page of `b`'s particles.
+pub(crate) fn per_page(b: &StepBuffers, bind: impl Fn(u32) -> wgpu::BindGroup) -> Bound {
+    Bound::Pages((0..b.pages.pages.count).map(bind).collect())
 }
 
-impl Bound {
-    /// A bind group per page of `b`'s particles.
-    pub fn per_page(b: &StepBuffers, bind: impl Fn(u32) -> wgpu::BindGroup) -> Bound {
-        Bound::Pages((0..b.pages.pages.count).map(bind).collect())
-    }
-
-    pub fn whole(&self) -> &wgpu::BindGroup {
-        match self {
-            Bound::Whole(bind) => bind,
-            _ => unreachable!("a whole-buffer pass bound otherwise"),
-        }
-    }
-
-    /// Each page's bind group with the page's particle count.
-    pub fn pages<'a>(
-        &'a self,
-        at: &'a Extent,
-    ) -> impl Iterator<Item = (&'a wgpu::BindGroup, u32)> + 'a {
-        let binds = match self {
-            Bound::Pages(binds) => binds.as_slice(),
-            _ => unreachable!("a per-page pass bound otherwise"),
-        };
-        binds.iter().zip(at.page_counts.iter().copied())
-    }
-
-    pub fn sort_plan(&self) -> &SortPlan {
-        match self {
-            Bound::Sort(plan) => plan,
-            _ => unreachable!("the sort bound otherwise"),
-        }
-    }
+/// Each page's bind group of `bound` with the page's particle count.
+pub(crate) fn pages<'a>(
+    bound: &'a Bound,
+    at: &'a Extent,
+) -> impl Iterator<Item = (&'a wgpu::BindGroup, u32)> + 'a {
+    bound.pages().iter().zip(at.page_counts.iter().copied())
 }

@@ -4,7 +4,10 @@
 use crate::gpu::Kernel;
 use crate::sim::models::ModelsUsed;
 
-use super::{material_kernel, BindAt, Bound, Extent, StepBuffers, StepPass, MAT3, SCALAR, VEC4};
+use super::{
+    material_kernel, pages, per_page, BindAt, Bound, Extent, Pass, Step, StepBuffers, MAT3, SCALAR,
+    VEC4,
+};
 
 /// Runs at the first step of a submission only: G2P leaves the next step's affine term
 /// and sort keys ([`super::G2p`]).
@@ -41,23 +44,23 @@ impl Prepare {
     }
 }
 
-impl StepPass for Prepare {
+impl Pass<Step> for Prepare {
     fn name(&self) -> &'static str {
         "prepare"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
-        Bound::per_page(at.b, |i| self.bind_page(device, at.b, i))
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
+        per_page(at.b, |i| self.bind_page(device, at.b, i))
     }
 
     /// One invocation per particle of the page.
     fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &Extent) {
-        for (bind, n) in bound.pages(at) {
+        for (bind, n) in pages(bound, at) {
             self.kernel.dispatch(c, bind, n.div_ceil(256));
         }
     }
 
-    fn runs(&self, first: bool) -> bool {
-        first
+    fn runs(&self, at: &Extent) -> bool {
+        at.first
     }
 }

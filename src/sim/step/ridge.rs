@@ -4,8 +4,8 @@
 use crate::gpu::Kernel;
 
 use super::{
-    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Sorted, StepBuffers,
-    StepPass,
+    gather_bindings, gather_source, step_kernel, BindAt, Bound, Extent, Pass, Sorted, Step,
+    StepBuffers,
 };
 
 pub(crate) struct Ridge {
@@ -36,12 +36,12 @@ impl Ridge {
     }
 }
 
-impl StepPass for Ridge {
+impl Pass<Step> for Ridge {
     fn name(&self) -> &'static str {
         "ridge"
     }
 
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         Bound::Whole(self.bind_group(device, at.b, at.sorted()))
     }
 

@@ -5,7 +5,7 @@ use crate::gpu::scan::Scan;
 use crate::gpu::sort::{RadixSort, SortBuffers};
 use crate::gpu::Executor;
 
-use super::{BindAt, Bound, Extent, StepPass};
+use super::{BindAt, Bound, Extent, Pass, Sorted, Step};
 
 pub(crate) struct SortCells {
     sort: RadixSort,
@@ -21,14 +21,14 @@ impl SortCells {
     }
 }
 
-impl StepPass for SortCells {
+impl Pass<Step> for SortCells {
     fn name(&self) -> &'static str {
         "sort"
     }
 
     /// The sort's plan for the prepared keys; the passes bound after it read the sorted
     /// pairs from where the plan leaves them.
-    fn bind(&self, device: &wgpu::Device, at: &BindAt) -> Bound {
+    fn bind(&self, device: &wgpu::Device, at: &mut BindAt) -> Bound {
         let b = at.b;
         let buffers = SortBuffers {
             count: &b.key_count,
@@ -44,6 +44,7 @@ impl StepPass for SortCells {
             at.particles.max(1),
             at.sort_bits,
         );
+        at.sorted = Some(Sorted::after(b, &plan));
         Bound::Sort(plan)
     }
 

@@ -7,18 +7,15 @@
 //!    transmittance pass's dispatch size;
 //! 3. [`ShadowTransmit`] — the transmittance along each listed voxel's ray to its light;
 //! 4. [`Shade`] — Blinn-Phong of each visible Gaussian's projected colour.
+//!
+//! In a frame, 1–3 are the one [`Shadows`] pass of the [`Render`] family (with shadows
+//! on), and [`Shade`] the next.
 
 use super::{Lighting, LIGHTING};
+use crate::gpu::pass::{Bound, Pass};
 use crate::gpu::wgsl::Source;
 use crate::gpu::Kernel;
-
-/// What the lighting passes read of the frame and of the uploaded Gaussians.
-pub(crate) struct FrameInputs<'a> {
-    pub frame: &'a wgpu::Buffer,
-    pub gaussians: &'a wgpu::Buffer,
-    pub depth_keys: &'a wgpu::Buffer,
-    pub projected: &'a wgpu::Buffer,
-}
+use crate::render::gpu::{FrameExtent, FrameInputs, Render};
 
 fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
     Kernel::new(
@@ -30,10 +27,10 @@ fn kernel(device: &wgpu::Device, label: &'static str, pass: &str) -> Kernel {
 }
 
 /// `shaders/render/shadow_splat.wgsl`.
-pub(crate) struct ShadowSplat(Kernel);
+struct ShadowSplat(Kernel);
 
 impl ShadowSplat {
-    pub fn new(device: &wgpu::Device) -> ShadowSplat {
+    fn new(device: &wgpu::Device) -> ShadowSplat {
         ShadowSplat(kernel(
             device,
             "shadow_splat",
@@ -41,12 +38,12 @@ impl ShadowSplat {
         ))
     }
 
-    pub fn bind(&self, device: &wgpu::Device, l: &Lighting, f: &FrameInputs) -> wgpu::BindGroup {
+    fn bind(&self, device: &wgpu::Device, l: &Lighting, f: &FrameInputs) -> wgpu::BindGroup {
         self.0.bind_named(
             device,
             &[
                 ("lights", &l.lights),
-                ("gaussians", f.gaussians),
+                ("gaussians", &f.s.gaussians),
                 ("depth", &l.depth),
                 ("count", &l.count),
             ],
@@ -54,16 +51,16 @@ impl ShadowSplat {
     }
 
     /// One invocation per Gaussian.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, gaussians: u32) {
+    fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, gaussians: u32) {
         self.0.dispatch(c, bind, gaussians.div_ceil(256));
     }
 }
 
 /// `shaders/render/shadow_mark.wgsl`.
-pub(crate) struct ShadowMark(Kernel);
+struct ShadowMark(Kernel);
 
 impl ShadowMark {
-    pub fn new(device: &wgpu::Device) -> ShadowMark {
+    fn new(device: &wgpu::Device) -> ShadowMark {
         ShadowMark(kernel(
             device,
             "shadow_mark",
@@ -71,15 +68,15 @@ impl ShadowMark {
         ))
     }
 
-    pub fn bind(&self, device: &wgpu::Device, l: &Lighting, f: &FrameInputs) -> wgpu::BindGroup {
+    fn bind(&self, device: &wgpu::Device, l: &Lighting, f: &FrameInputs) -> wgpu::BindGroup {
         self.0.bind_named(
             device,
             &[
                 ("frame", f.frame),
                 ("lights", &l.lights),
-                ("gaussians", f.gaussians),
+                ("gaussians", &f.s.gaussians),
                 ("shading", &l.shading),
-                ("depth_keys", f.depth_keys),
+                ("depth_keys", &f.s.depth_keys),
                 ("asked", &l.asked),
                 ("asked_list", &l.asked_list),
                 ("transmit_args", &l.transmit_args),
@@ -88,16 +85,16 @@ impl ShadowMark {
     }
 
     /// One invocation per Gaussian.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, gaussians: u32) {
+    fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, gaussians: u32) {
         self.0.dispatch(c, bind, gaussians.div_ceil(256));
     }
 }
 
 /// `shaders/render/shadow_transmit.wgsl`.
-pub(crate) struct ShadowTransmit(Kernel);
+struct ShadowTransmit(Kernel);
 
 impl ShadowTransmit {
-    pub fn new(device: &wgpu::Device) -> ShadowTransmit {
+    fn new(device: &wgpu::Device) -> ShadowTransmit {
         ShadowTransmit(kernel(
             device,
             "shadow_transmit",
@@ -105,7 +102,7 @@ impl ShadowTransmit {
         ))
     }
 
-    pub fn bind(&self, device: &wgpu::Device, l: &Lighting) -> wgpu::BindGroup {
+    fn bind(&self, device: &wgpu::Device, l: &Lighting) -> wgpu::BindGroup {
         self.0.bind_named(
             device,
             &[
@@ -119,7 +116,7 @@ impl ShadowTransmit {
     }
 
     /// As many workgroups as [`ShadowMark`] wrote into `transmit_args`.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, l: &Lighting) {
+    fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, l: &Lighting) {
         self.0.dispatch_indirect(c, bind, &l.transmit_args, 0);
     }
 }
@@ -135,46 +132,90 @@ impl Shade {
             include_str!("../../../../shaders/render/shade.wgsl"),
         ))
     }
+}
 
-    pub fn bind(&self, device: &wgpu::Device, l: &Lighting, f: &FrameInputs) -> wgpu::BindGroup {
-        self.0.bind_named(
+/// The shadow volume of a frame: [`ShadowSplat`], [`ShadowMark`], [`ShadowTransmit`].
+pub(crate) struct Shadows {
+    splat: ShadowSplat,
+    mark: ShadowMark,
+    transmit: ShadowTransmit,
+}
+
+impl Shadows {
+    pub fn new(device: &wgpu::Device) -> Shadows {
+        Shadows {
+            splat: ShadowSplat::new(device),
+            mark: ShadowMark::new(device),
+            transmit: ShadowTransmit::new(device),
+        }
+    }
+}
+
+impl Pass<Render> for Shadows {
+    fn name(&self) -> &'static str {
+        "shadows"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &mut FrameInputs) -> Bound {
+        let l = at.lighting();
+        Bound::Parts(vec![
+            Bound::Whole(self.splat.bind(device, l, at)),
+            Bound::Whole(self.mark.bind(device, l, at)),
+            Bound::Whole(self.transmit.bind(device, l)),
+        ])
+    }
+
+    /// The optical depth it splats into, the voxels asked for and their count.
+    fn clear(&self, enc: &mut wgpu::CommandEncoder, at: &FrameExtent) {
+        let l = at.lighting();
+        enc.clear_buffer(&l.depth, 0, None);
+        enc.clear_buffer(&l.asked, 0, None);
+        enc.clear_buffer(&l.transmit_args, 0, None);
+    }
+
+    /// After the projection, which culls: only what is shaded asks for shadows.
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &FrameExtent) {
+        let [splat, mark, transmit] = bound.parts() else {
+            unreachable!("shadows bound otherwise")
+        };
+        self.splat.record(c, splat.whole(), at.count);
+        self.mark.record(c, mark.whole(), at.count);
+        self.transmit.record(c, transmit.whole(), at.lighting());
+    }
+
+    fn runs(&self, at: &FrameExtent) -> bool {
+        at.count > 0
+    }
+}
+
+impl Pass<Render> for Shade {
+    fn name(&self) -> &'static str {
+        "shade"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &mut FrameInputs) -> Bound {
+        let (l, s) = (at.lighting(), at.s);
+        Bound::Whole(self.0.bind_named(
             device,
             &[
-                ("frame", f.frame),
+                ("frame", at.frame),
                 ("lights", &l.lights),
-                ("gaussians", f.gaussians),
+                ("gaussians", &s.gaussians),
                 ("shading", &l.shading),
                 ("materials", &l.materials),
                 ("transmittance", &l.transmittance),
-                ("depth_keys", f.depth_keys),
-                ("projected", f.projected),
+                ("depth_keys", &s.depth_keys),
+                ("projected", &s.projected),
             ],
-        )
+        ))
     }
 
     /// One invocation per Gaussian.
-    pub fn record(&self, c: &mut wgpu::ComputePass, bind: &wgpu::BindGroup, gaussians: u32) {
-        self.0.dispatch(c, bind, gaussians.div_ceil(256));
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, at: &FrameExtent) {
+        self.0.dispatch(c, bound.whole(), at.count.div_ceil(256));
     }
-}
 
-/// The lighting passes' bind groups over the current buffers.
-pub(crate) struct LightingBinds {
-    pub splat: wgpu::BindGroup,
-    pub mark: wgpu::BindGroup,
-    pub transmit: wgpu::BindGroup,
-    pub shade: wgpu::BindGroup,
-}
-
-impl Lighting {
-    /// Bind the four passes over `f` (cheap; made per frame so that re-uploads and grown
-    /// buffers need no bookkeeping).
-    pub fn binds(&self, device: &wgpu::Device, f: &FrameInputs) -> LightingBinds {
-        LightingBinds {
-            splat: self.splat.bind(device, self, f),
-            mark: self.mark.bind(device, self, f),
-            transmit: self.transmit.bind(device, self),
-            shade: self.shade.bind(device, self, f),
-        }
+    fn runs(&self, at: &FrameExtent) -> bool {
+        at.count > 0
     }
 }
