@@ -534,7 +534,7 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
     use splatter::derive::Derive;
     use splatter::relight::oct_decode;
     use splatter::sim::gpu::GpuSim;
-    use splatter::sim::models::nacc::oracle::{Case3Variant, NaccParams};
+    use splatter::sim::model::nacc::oracle::{Case3Variant, NaccParams};
     use splatter::sim::{Boundaries, Grid, Material, Particles, StepParams, Transfer};
 
     let spacing = 0.02;

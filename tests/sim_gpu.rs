@@ -10,7 +10,7 @@ use splatter::gpu::pages::Pages;
 use splatter::gpu::GpuContext;
 use splatter::sim::cpu::step;
 use splatter::sim::gpu::{GpuSim, P2gPath};
-use splatter::sim::models::nacc::oracle::Case3Variant;
+use splatter::sim::model::nacc::oracle::Case3Variant;
 use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, PlaneCollider,
     StepParams, Transfer,
@@ -382,14 +382,14 @@ fn gpu_nacc_step_matches_the_cpu_reference() {
     }
 }
 
-/// A brittle sphere (Weibull strengths, `sim::models::Brittle`) thrown onto a sticky
+/// A brittle sphere (Weibull strengths, `sim::model::Brittle`) thrown onto a sticky
 /// ground: its damage on the GPU follows the CPU reference, particle by particle, so the
 /// strength each particle draws (a hash of its index) and the split stress agree. A
 /// particle near its threshold may cross it one step apart in f32, so a few may differ.
 #[test]
 fn gpu_brittle_step_matches_the_cpu_reference() {
-    use splatter::sim::models::Brittle;
-    use splatter::sim::models::PlasticLaw;
+    use splatter::sim::model::Brittle;
+    use splatter::sim::model::PlasticLaw;
     let spec =
         serde_json::json!({"strength": 150.0, "weibull_modulus": 6.0, "softening": 0.5, "seed": 4});
     let law = Brittle::from_spec(serde_json::from_value(spec).unwrap(), 2000.0, 0.38).unwrap();

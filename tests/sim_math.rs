@@ -4,7 +4,7 @@
 
 use glam::{DMat3, DQuat, DVec3};
 use splatter::rng::SplitMix64;
-use splatter::sim::models::nacc::oracle::{
+use splatter::sim::model::nacc::oracle::{
     j_from_pressure, principal_state, project_center, project_closest_point, project_continuous,
     project_pq, return_map, Case3Variant, NaccParams, ReturnCase, YieldEllipse, SIGMA_MIN,
 };
@@ -258,7 +258,7 @@ fn isotropic_tension_loses_cohesion() {
             crossed = Some((n, j_total));
             p_before = out.p;
         } else if crossed.is_some() {
-            let floor = params.kappa() * splatter::sim::models::nacc::oracle::EPS0;
+            let floor = params.kappa() * splatter::sim::model::nacc::oracle::EPS0;
             assert_eq!(params.p0(alpha), floor);
             assert!(
                 (out.p + params.beta * floor).abs() < 1e-12 * floor,
@@ -269,7 +269,7 @@ fn isotropic_tension_loses_cohesion() {
     }
     let (n_yield, j_yield, p_yield) = first_yield.expect("never yielded");
     let (n_cross, j_cross) = crossed.expect("α never crossed 0");
-    let floor = params.kappa() * splatter::sim::models::nacc::oracle::EPS0;
+    let floor = params.kappa() * splatter::sim::model::nacc::oracle::EPS0;
     println!(
         "(d) first yield at step {n_yield} (J = {j_yield:.5}, p = {p_yield:.2}); α ≥ 0 at step \
          {n_cross} (J = {j_cross:.5}, last cohesive p = {p_before:.3}); afterwards p = −βκε₀ = \

@@ -3,7 +3,7 @@
 //! adapter and on the GL backend (lavapipe and llvmpipe on a machine without a GPU).
 //!
 //! Each function under test gets a compute shader: the simulation modules
-//! ([`wgsl::library`]; for a law's functions, the registry's WGSL [`splatter::sim::models::wgsl`] in
+//! ([`wgsl::library`]; for a law's functions, the registry's WGSL [`splatter::sim::model::wgsl`] in
 //! `extra`) plus `shaders/common.wgsl` plus a small `@compute fn main` that
 //! reads one input record per invocation from a flat `array<f32>` and writes one output
 //! record. Inputs are drawn with [`SplitMix64`] in f64, rounded to f32 for the GPU, and the
@@ -20,14 +20,14 @@ use splatter::gpu::{GpuContext, Kernel};
 use splatter::render::gpu::read_buffer;
 use splatter::rng::SplitMix64;
 use splatter::sim::bspline::{stencil_offsets, Stencil};
-use splatter::sim::elasticity::{kirchhoff_fixed_corotated, kirchhoff_neo_hookean, Lame};
-use splatter::sim::models::nacc::oracle::{
+use splatter::sim::gpu::wgsl;
+use splatter::sim::model::elasticity::{kirchhoff_fixed_corotated, kirchhoff_neo_hookean, Lame};
+use splatter::sim::model::nacc::oracle::{
     j_from_pressure, principal_state, project_pq, return_map, stretches_from_pq, Case3Variant,
     NaccParams, PlasticReturn, PrincipalState, ReturnCase, YieldEllipse, SIGMA_MIN,
 };
-use splatter::sim::models::nacc::{self as nacc_model, NaccMaterialGpu};
+use splatter::sim::model::nacc::{self as nacc_model, NaccMaterialGpu};
 use splatter::sim::svd::{polar, svd3};
-use splatter::sim::wgsl;
 use wgpu::util::DeviceExt;
 
 const COMMON: &str = include_str!("../shaders/common.wgsl");
@@ -832,7 +832,7 @@ fn nacc_return_map_matches_the_oracle() {
         .collect();
     let extra = format!(
         "{}\n@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;",
-        splatter::sim::models::wgsl()
+        splatter::sim::model::wgsl()
     );
     let body = "
     let out = nacc_return_map(in_mat3(ib), in1(ib + 9u), materials[u32(in1(ib + 10u))]);
@@ -1024,7 +1024,7 @@ fn nacc_p0_matches_the_oracle() {
     }
     let extra = format!(
         "{}\n@group(0) @binding(2) var<storage, read> materials: array<NaccMaterial>;",
-        splatter::sim::models::wgsl()
+        splatter::sim::model::wgsl()
     );
     let body = "
     let alpha = in1(ib);
@@ -1086,7 +1086,7 @@ fn nacc_p0_matches_the_oracle() {
 #[test]
 fn every_registered_model_is_reached_by_its_code() {
     use splatter::sim::gpu::GpuMaterial;
-    use splatter::sim::{models, ElasticModel, Material, PlasticModel};
+    use splatter::sim::{model, ElasticModel, Material, PlasticModel};
     let mut r = SplitMix64::new(404);
     let n = 2000;
     let mut flat = Vec::new();
@@ -1117,7 +1117,7 @@ fn every_registered_model_is_reached_by_its_code() {
     let extra = format!(
         "{}\n@group(0) @binding(2) var<storage, read> materials: array<SimMaterial>;\n\
          const ALPHAS = array<f32, {}>({});",
-        models::wgsl(),
+        model::wgsl(),
         materials.len(),
         alphas.join(", ")
     );

@@ -16,7 +16,7 @@ use glam::{DMat3, DVec3};
 use serde::{Deserialize, Serialize};
 
 use crate::runner::{simulate, Outcome};
-use splatter::sim::models::nacc::oracle::{project_pq, ReturnCase};
+use splatter::sim::model::nacc::oracle::{project_pq, ReturnCase};
 use splatter::sim::ElasticModel;
 use splatter::sim::{cfl_dt, Grid, Material, Particles, StepParams};
 use splatter::sim::{return_map, Case3Variant, NaccParams};

@@ -53,7 +53,7 @@ pub struct AccuracyOptions<'a> {
     /// The shatter study's grid spacings, if not its defaults.
     pub shatter_dx: Option<&'a [f64]>,
     /// The shatter study's return mappings, if not both.
-    pub shatter_mappings: Option<&'a [splatter::sim::models::nacc::oracle::ReturnMapping]>,
+    pub shatter_mappings: Option<&'a [splatter::sim::model::nacc::oracle::ReturnMapping]>,
     /// The shatter study simulates one quarter of the fruit (`shatter::cut_to_quarter`).
     pub shatter_quarter: bool,
 }

@@ -8,7 +8,7 @@ use anyhow::{bail, Result};
 use clap::{Parser, Subcommand, ValueEnum};
 use splatter::gpu::{BackendChoice, GpuContext};
 use splatter::sim::gpu::P2gPath;
-use splatter::sim::models::nacc::oracle::ReturnMapping;
+use splatter::sim::model::nacc::oracle::ReturnMapping;
 use splatter_lab::peer::Peer;
 use splatter_lab::{AccuracyOptions, Part};
 
@@ -136,7 +136,7 @@ impl P2gArg {
     }
 }
 
-/// A return mapping by its scene-file name (`sim::models::nacc::oracle::ReturnMapping`).
+/// A return mapping by its scene-file name (`sim::model::nacc::oracle::ReturnMapping`).
 fn return_mapping(name: &str) -> Result<ReturnMapping, String> {
     ReturnMapping::from_name(name).ok_or_else(|| {
         let names: Vec<_> = ReturnMapping::ALL.iter().map(|m| m.name()).collect();

@@ -1,4 +1,4 @@
-//! A bar pulled past yield (von Mises, `sim::models::VonMises`) on the CPU reference step
+//! A bar pulled past yield (von Mises, `sim::model::VonMises`) on the CPU reference step
 //! (f64): the validation of docs/notes/metal.md, *Metal and plasticine: a bar pulled past
 //! yield*, shared by `lab/examples/von_mises_bar.rs` and `lab/tests/plastic_bar.rs`.
 //!
@@ -36,7 +36,7 @@
 use glam::{DMat3, DVec3, UVec3};
 
 use crate::driven::driven_step;
-use splatter::sim::models::VonMises;
+use splatter::sim::model::VonMises;
 use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use splatter::run::{one_line, Event, Input, Run, RunOptions};
-use splatter::sim::models::nacc::oracle::ReturnMapping;
+use splatter::sim::model::nacc::oracle::ReturnMapping;
 
 /// Grid spacings of the full study (metres), coarse to fine, and of `--quick`.
 pub const DX_FULL: [f64; 3] = [0.03, 0.02, 0.015];

@@ -1,4 +1,4 @@
-//! Snow packed under load (`sim::models::Snow`) on the CPU reference step (f64): a block
+//! Snow packed under load (`sim::model::Snow`) on the CPU reference step (f64): a block
 //! in a frictionless box (the domain's separating walls, which the block fills wall to
 //! wall) pressed by a plate that comes down at a constant speed — confined (uniaxial)
 //! compaction, docs/notes/snow.md *Snow: a snowball on impact and under load*. Used by
@@ -20,7 +20,7 @@
 use glam::DVec3;
 
 use crate::driven::driven_step;
-use splatter::sim::models::{PlasticLaw, Snow};
+use splatter::sim::model::{PlasticLaw, Snow};
 use splatter::sim::{
     cfl_dt, Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };

@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::suite::PAPER_EXAMPLES;
-use splatter::sim::elasticity::Lame;
+use splatter::sim::model::elasticity::Lame;
 
 /// The density column as printed: "2" in every row.
 pub const DENSITY_LITERAL: f64 = 2.0;

@@ -1,4 +1,4 @@
-// Kirchhoff stresses τ(F) of docs/method.md §3 in f32: the WGSL twin of src/sim/elasticity.rs.
+// Kirchhoff stresses τ(F) of docs/method.md §3 in f32: the WGSL twin of src/sim/model/elasticity.rs.
 // Needs: sim/math, sim/svd.
 // Lamé parameters come from the host (computed in f64 from E, ν by
 // `Lame::from_young_poisson`; κ = λ + 2μ/3).

@@ -1,8 +1,8 @@
-// A material as the step passes see it (`sim::step::GpuMaterial`): which registered
+// A material as the step passes see it (`sim::gpu::step::GpuMaterial`): which registered
 // elastic and plastic model, the Lamé parameters, and the plastic model's own parameters
 // in the order its `PlasticLaw::gpu_params` packs them (its file under
-// shaders/sim/models/ unpacks them). The ELASTIC_*/PLASTIC_* codes and the dispatch
-// functions on them are generated from the Rust registry (sim::models::wgsl) and follow
+// shaders/sim/model/ unpacks them). The ELASTIC_*/PLASTIC_* codes and the dispatch
+// functions on them are generated from the Rust registry (sim::model::wgsl) and follow
 // this file.
 struct SimMaterial {
     // ELASTIC_*

@@ -4,7 +4,7 @@
 // nacc_) so they can sit next to shaders/common.wgsl and a kernel's own code.
 //
 // Mirrors: nothing in Rust needs these one-liners, except `sim_sinh`, whose f64 twin is
-// `f64::sinh` in `NaccParams::p0` (src/sim/models/nacc/oracle.rs).
+// `f64::sinh` in `NaccParams::p0` (src/sim/model/nacc/oracle.rs).
 
 const SIM_IDENTITY3 = mat3x3<f32>(vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), vec3<f32>(0.0, 0.0, 1.0));
 

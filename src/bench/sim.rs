@@ -247,7 +247,7 @@ pub fn sim_paths(gpu: &GpuContext) -> Vec<crate::sim::gpu::P2gPath> {
 pub enum SimModel {
     /// NACC with the paper's fruit parameters, `continuous` k = 2.
     Nacc,
-    /// Brittle damage with the same E and ν (`sim::models::Brittle`: σ̄ 100 Pa,
+    /// Brittle damage with the same E and ν (`sim::model::Brittle`: σ̄ 100 Pa,
     /// Weibull m 6, softening 0.5), the law the shipped drops break with.
     Brittle,
     /// Fixed corotated with the same E and ν (what MPM peers run).
@@ -288,7 +288,7 @@ impl SimCase {
 
     /// About `n` particles of `model` on a `cells`³ grid.
     pub fn with_model(n: usize, cells: u32, model: SimModel) -> SimCase {
-        use crate::sim::models::nacc::oracle::{Case3Variant, NaccParams};
+        use crate::sim::model::nacc::oracle::{Case3Variant, NaccParams};
         use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
         use glam::DVec3;
         let material = match model {
@@ -304,7 +304,7 @@ impl SimCase {
                 Case3Variant::Continuous { k: 2.0 },
             ),
             SimModel::Brittle => {
-                use crate::sim::models::{Brittle, PlasticLaw};
+                use crate::sim::model::{Brittle, PlasticLaw};
                 let spec = serde_json::json!({
                     "strength": 100.0, "weibull_modulus": 6.0, "softening": 0.5
                 });

@@ -256,7 +256,7 @@ impl RigidDerive {
 }
 
 fn source() -> String {
-    crate::sim::wgsl::library_source()
+    crate::sim::gpu::wgsl::library_source()
         .module(&crate::render::gpu::lighting::LIGHTING)
         .pass(include_str!("../../shaders/sim/derive.wgsl"))
 }

@@ -19,7 +19,7 @@ use crate::gpu::wgsl::Source;
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::gpu::lighting::LIGHTING;
 use crate::render::GpuRenderer;
-use crate::sim::wgsl;
+use crate::sim::gpu::wgsl;
 
 /// `NormalsParams` of `shaders/relight/normals_common.wgsl`.
 #[repr(C)]

@@ -20,7 +20,7 @@ use crate::scene::simulation::SimulationSetup;
 use crate::scene::{self, BuildReport, Scene};
 use crate::sim::frame::FrameError;
 use crate::sim::gpu::{GpuSim, P2gPath, SimPlan, SimRequest, Watchdog, FIXED_POINT_CELLS_PER_STEP};
-use crate::sim::models::PlasticModel;
+use crate::sim::model::PlasticModel;
 use crate::sim::time_step::{Clock, StepPlan};
 use crate::splat::sh::ShRotator;
 

@@ -1,6 +1,6 @@
 //! The scene file's `material` objects (docs/scene-format.md): `model` names a registered
 //! elastic model (`fixed_corotated`, `neo_hookean`, `stvk_hencky`) or a registered plastic
-//! law (`nacc`, `drucker_prager`, `von_mises`, `snow`: `sim::models`), with `E`, `nu`,
+//! law (`nacc`, `drucker_prager`, `von_mises`, `snow`: `sim::model`), with `E`, `nu`,
 //! `density` and the law's own parameters. Parsing, the schema and the validation of a
 //! law's parameters all come from the registry.
 
@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
 use super::SceneError;
-use crate::sim::models::ParseError;
+use crate::sim::model::ParseError;
 use crate::sim::{ElasticModel, Material, PlasticModel};
 
 /// A material (docs/method.md §3–§4): a registered model by name, its elastic constants

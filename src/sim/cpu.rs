@@ -5,7 +5,7 @@
 //! B-splines, affine_p = m_p C_p − Δt V⁰_p (4/Δx²) τ_p), **grid update** ([`grid_update`]:
 //! v = p/m, gravity, boundary conditions) and **G2P** ([`g2p`]: v_p, C_p, F ← (I + Δt C) F,
 //! x += Δt v, then the material's plasticity: its law's return mapping from the registry
-//! (`sim::models`), nothing for a purely elastic material). Velocity is updated before position (symplectic Euler).
+//! (`sim::model`), nothing for a purely elastic material). Velocity is updated before position (symplectic Euler).
 //!
 //! # P2G without atomics, deterministic
 //!

@@ -1,6 +1,6 @@
 //! The explicit MPM step on the GPU (docs/method.md §2), mirroring [`super::cpu`] pass for
 //! pass: [`GpuSim`] holds the particle state, the sparse grid and the step's passes
-//! ([`super::step`], one type per WGSL file), and records steps without readbacks.
+//! ([`step`], one type per WGSL file), and records steps without readbacks.
 //!
 //! The grid is sparse: a pool of blocks of 4³ nodes with a block → slot table that
 //! `compact_blocks.wgsl` fills each step (`node_index` in `common.wgsl` is the only way to a
@@ -17,17 +17,17 @@ use glam::{DMat3, DVec3, Mat3};
 use wgpu::util::DeviceExt;
 
 use super::kinematic::KinematicCollider;
-use super::step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
-use super::step::{
-    Binds, Extent, GridTexture, Passes, Scatter, StepBuffers, StepPasses, GRID_TEXELS_PER_ROW,
-};
 use super::{Grid, Material, Particles, StepParams};
 use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
 use crate::gpu::stages;
 use crate::gpu::{GpuContext, GpuError};
+use step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
+use step::{
+    Binds, Extent, GridTexture, Passes, Scatter, StepBuffers, StepPasses, GRID_TEXELS_PER_ROW,
+};
 
-pub use super::step::layout::{
+pub use step::layout::{
     GpuCollider, GpuCondition, GpuMaterial, GpuStep, SimSetupError, MAX_COLLIDERS, MAX_KINEMATIC,
     MAX_MATERIALS,
 };
@@ -35,23 +35,26 @@ pub use super::step::layout::{
 const MAT3_BYTES: u64 = 48;
 /// The watchdog's counters (`flags` of the step passes): one word per [`WatchSlot`].
 const WATCHDOG_BYTES: u64 = WatchSlot::COUNT as u64 * 4;
-use super::codes::{WatchSlot, BLOCK};
+use codes::{WatchSlot, BLOCK};
 
+pub mod codes;
 mod p2g_path;
 mod p2g_race;
 pub mod plan;
 mod pool;
 mod readback;
 mod setup;
+pub mod step;
 mod watchdog;
+pub mod wgsl;
 
-pub use super::step::layout::FIXED_POINT_CELLS_PER_STEP;
 pub use p2g_path::P2gPath;
 pub use p2g_race::P2gRace;
 pub use plan::{PlanError, SimPlan, SimRequest};
 pub use pool::gather_range_entries;
 use pool::{blocks_reached, initial_pool, max_pool_blocks, sums_bytes};
 use setup::{allocate, Layout, PoolSize};
+pub use step::layout::FIXED_POINT_CELLS_PER_STEP;
 pub use watchdog::Watchdog;
 
 /// A simulation living on the GPU: particle state, grid, and the passes of one step.
@@ -192,7 +195,7 @@ impl GpuSim {
             P2gPath::Atomic => Some(Scatter::Float),
             P2gPath::Fixed => Some(Scatter::Fixed),
         };
-        let used = crate::sim::models::ModelsUsed::of(materials);
+        let used = crate::sim::model::ModelsUsed::of(materials);
         let passes = Passes::new(gpu, (scatter, separation), &used);
         let layout = Layout {
             particles,

@@ -2,13 +2,13 @@
 //! with a registered plastic model (or none) after each F update. Shared by the CPU
 //! reference step, the GPU step and the scene setup. The models themselves, and what
 //! each plastic model keeps in the particle's hardening state α, are in
-//! [`super::models`].
+//! [`super::model`].
 
 use glam::DMat3;
 
-use super::elasticity::Lame;
-use super::models::nacc::oracle::{Case3Variant, NaccParams};
-use super::models::{ElasticModel, Nacc, Plastic, PlasticLaw, PlasticModel};
+use super::model::elasticity::Lame;
+use super::model::nacc::oracle::{Case3Variant, NaccParams};
+use super::model::{ElasticModel, Nacc, Plastic, PlasticLaw, PlasticModel};
 
 /// A material: the elastic model of the stress with its Lamé parameters, and the plastic
 /// model after the F update.
@@ -92,7 +92,7 @@ impl Material {
     }
 
     /// Whether the material breaks into pieces: its α measures damage
-    /// ([`super::models::PlasticLaw::FRACTURES`]).
+    /// ([`super::model::PlasticLaw::FRACTURES`]).
     pub fn fractures(&self) -> bool {
         self.plastic_model().fractures()
     }

@@ -4,7 +4,7 @@
 
 pub mod cli;
 
-use splatter::sim::models::nacc::oracle::{Case3Variant, NaccParams};
+use splatter::sim::model::nacc::oracle::{Case3Variant, NaccParams};
 
 /// The paper's fruit material (docs/method.md §9: kiwi/dragonfruit class).
 pub fn fruit() -> NaccParams {

@@ -1,11 +1,11 @@
 // Shared declarations of the MPM step passes (docs/method.md §2). Mirrored by `#[repr(C)]` types in
 // src/sim/gpu.rs (checked by `sim::gpu::tests::layouts_match_wgsl`). The step's codes and the
-// registry's WGSL come with it (`sim::step::step_source`).
+// registry's WGSL come with it (`sim::gpu::step::step_source`).
 // Needs: sim/math, sim/bspline.
 
 // The limits MAX_{MATERIALS,COLLIDERS,KINEMATIC}, the boundary kinds BOUNDARY_{STICKY,SLIP,
 // SEPARATE}, the collider shapes SHAPE_{SPHERE,BOX,CYLINDER}, the block size BLOCK and
-// BLOCK_NODES and GRID_TEXELS_PER_ROW are generated from the Rust side (src/sim/codes.rs)
+// BLOCK_NODES and GRID_TEXELS_PER_ROW are generated from the Rust side (src/sim/gpu/codes.rs)
 // and precede this file.
 
 // A boundary condition on a domain face or a collider.

@@ -15,7 +15,7 @@
 // What the step's forces changed at each node, Δv_i (read only with a FLIP/PIC blend).
 @group(0) @binding(16) var grid_velocity_change: texture_2d<f32>;
 // The watchdog's counters (docs/method.md §2.3), one word per WATCH_* slot (their meanings
-// at sim::codes::WatchSlot). Read and cleared once per frame.
+// at sim::gpu::codes::WatchSlot). Read and cleared once per frame.
 @group(0) @binding(8) var<storage, read_write> flags: array<atomic<u32>, WATCH_SLOTS>;
 // What prepare.wgsl would compute for the next step, so that only the first step of a
 // submission runs it: the affine term (common.wgsl, affine_term), and on the gather path

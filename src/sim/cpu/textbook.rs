@@ -8,7 +8,7 @@
 
 use glam::{DMat3, DVec3, IVec3, UVec3};
 
-use crate::sim::elasticity::Lame;
+use crate::sim::model::elasticity::Lame;
 use crate::sim::svd::polar;
 use crate::sim::Particles;
 

@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::{GpuSim, P2gPath, SimSetupError};
 use crate::gpu::GpuContext;
-use crate::sim::models::nacc::oracle::{Case3Variant, NaccParams};
+use crate::sim::model::nacc::oracle::{Case3Variant, NaccParams};
 use crate::sim::{cfl_dt, Grid, Material, Particles, StepParams};
 
 /// The two timings of a race, in ms per step of the probe block, and the faster path.
