@@ -16,6 +16,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DQuat, DVec3};
 use wgpu::util::DeviceExt;
 
+use crate::gpu::pass::{Bound, Family, Pass};
 use crate::gpu::{GpuContext, GpuError, Kernel};
 use crate::render::{GpuRenderer, Splats};
 use crate::sim::gpu::GpuSim;
@@ -64,10 +65,58 @@ pub fn derive_normal(f: DMat3, n0: DVec3) -> DVec3 {
 /// The derive pass for one simulation whose Gaussians are `offset .. offset +
 /// binding.len()` of the renderer's buffer, each moved by the particle `binding` names.
 pub struct Derive {
-    kernel: Kernel,
-    bind: wgpu::BindGroup,
+    pass: DerivePass,
+    bound: Bound,
     count: u32,
     _buffers: [wgpu::Buffer; 3],
+}
+
+/// The derive pass's family (`gpu::pass`, the shape of every pass): it binds over the
+/// particles' state, its rest Gaussians and the renderer's buffers, and dispatches over its
+/// Gaussians.
+pub(crate) struct Deriving;
+
+impl Family for Deriving {
+    type Inputs<'a> = DeriveInputs<'a>;
+    type Extent<'a> = u32;
+}
+
+/// What the derive pass binds over.
+pub(crate) struct DeriveInputs<'a> {
+    params: &'a wgpu::Buffer,
+    x_mass: &'a wgpu::Buffer,
+    deformation: &'a wgpu::Buffer,
+    rest: &'a wgpu::Buffer,
+    gaussians: &'a wgpu::Buffer,
+    shading: &'a wgpu::Buffer,
+}
+
+/// `shaders/sim/derive.wgsl`.
+struct DerivePass(Kernel);
+
+impl Pass<Deriving> for DerivePass {
+    fn name(&self) -> &'static str {
+        "derive"
+    }
+
+    fn bind(&self, device: &wgpu::Device, at: &mut DeriveInputs) -> Bound {
+        Bound::Whole(self.0.bind_named(
+            device,
+            &[
+                ("params", at.params),
+                ("x_mass", at.x_mass),
+                ("deformation", at.deformation),
+                ("rest", at.rest),
+                ("gaussians", at.gaussians),
+                ("shading", at.shading),
+            ],
+        ))
+    }
+
+    /// One invocation per Gaussian.
+    fn record(&self, c: &mut wgpu::ComputePass, bound: &Bound, gaussians: &u32) {
+        self.0.dispatch(c, bound.whole(), gaussians.div_ceil(256));
+    }
 }
 
 impl Derive {
@@ -153,7 +202,7 @@ impl Derive {
             contents: &rest_bytes,
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let kernel = Kernel::new(device, "derive", &source(), "main");
+        let pass = DerivePass(Kernel::new(device, "derive", &source(), "main"));
         let (x_mass, deformation) = state;
         let stand_in = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("derive no shading"),
@@ -162,20 +211,18 @@ impl Derive {
             mapped_at_creation: false,
         });
         let shading = renderer.shading_buffer().unwrap_or(&stand_in);
-        let bind = kernel.bind_named(
-            device,
-            &[
-                ("params", &params),
-                ("x_mass", x_mass),
-                ("deformation", deformation),
-                ("rest", &rest),
-                ("gaussians", target),
-                ("shading", shading),
-            ],
-        );
+        let mut inputs = DeriveInputs {
+            params: &params,
+            x_mass,
+            deformation,
+            rest: &rest,
+            gaussians: target,
+            shading,
+        };
+        let bound = pass.bind(device, &mut inputs);
         Ok(Derive {
-            kernel,
-            bind,
+            pass,
+            bound,
             count,
             _buffers: [params, rest, stand_in],
         })
@@ -183,8 +230,7 @@ impl Derive {
 
     /// Record the pass.
     pub fn record(&self, cpass: &mut wgpu::ComputePass) {
-        self.kernel
-            .dispatch(cpass, &self.bind, self.count.div_ceil(256));
+        self.pass.record(cpass, &self.bound, &self.count);
     }
 
     /// Record and submit the pass on its own.

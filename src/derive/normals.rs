@@ -1,7 +1,7 @@
 //! PCA normals on the GPU, in the deformed configuration (`lighting.simulated_normals =
 //! "recompute"`): the simulated Gaussians are hashed into a uniform grid
-//! (`shaders/relight/normals_keys.wgsl`), sorted by cell (the GPU primitive [`RadixSort`]),
-//! the cells' runs found ([`Ranges`]), the centres copied into cell order
+//! (`shaders/relight/normals_keys.wgsl`), sorted by cell (the GPU primitive
+//! `gpu::sort::RadixSort`), the cells' runs found (`gpu::ranges`), the centres copied into cell order
 //! (`normals_points.wgsl`), and each Gaussian's normal refitted from the same object's
 //! centres within a radius (`normals_pca.wgsl`) — written straight into the
 //! renderer's shading records, with no readback. The CPU twin is
@@ -12,14 +12,17 @@ use glam::Vec3;
 use std::ops::Range;
 use wgpu::util::DeviceExt;
 
-use crate::gpu::ranges::Ranges;
-use crate::gpu::scan::Scan;
-use crate::gpu::sort::{RadixSort, SortBuffers, SortPlan};
+mod passes;
+
+use crate::gpu::pass::{bind_in_order, clear_all, Bound, Pass};
 use crate::gpu::wgsl::Source;
-use crate::gpu::{GpuContext, GpuError, Kernel};
+use crate::gpu::{GpuContext, GpuError};
 use crate::render::gpu::lighting::LIGHTING;
 use crate::render::GpuRenderer;
 use crate::sim::gpu::wgsl;
+use passes::{
+    CellPoints, CellRanges, CellSort, HashKeys, Pca, Refit, RefitBuffers, RefitExtent, RefitInputs,
+};
 
 /// `NormalsParams` of `shaders/relight/normals_common.wgsl`.
 #[repr(C)]
@@ -72,32 +75,63 @@ pub struct RecomputedObject {
 
 /// The GPU normal pass over some objects of a renderer's Gaussians.
 pub struct GpuNormals {
-    keys: Kernel,
-    points: Kernel,
-    pca: Kernel,
-    tile_ranges: Ranges,
-    sort: RadixSort,
-    scan: Scan,
-    plan: SortPlan,
-    keys_bind: wgpu::BindGroup,
-    ranges_bind: wgpu::BindGroup,
-    points_bind: wgpu::BindGroup,
-    pca_bind: wgpu::BindGroup,
-    cell_ranges: wgpu::Buffer,
+    passes: Vec<Box<dyn Pass<Refit>>>,
+    /// Each pass's bind groups over `buffers` and the renderer's.
+    bound: Vec<Bound>,
+    buffers: RefitBuffers,
     count: u32,
-    _buffers: Vec<wgpu::Buffer>,
 }
 
 fn storage(device: &wgpu::Device, label: &str, bytes: u64) -> wgpu::Buffer {
     crate::gpu::buffers::storage(device, label, bytes, wgpu::BufferUsages::empty())
 }
 
+/// The hash grid over `lo..hi` for `objects`: its constants, each object's radius and
+/// layer (and an empty last entry), each Gaussian's object, and its cell count.
+fn hash_grid(
+    objects: &[RecomputedObject],
+    lo: Vec3,
+    hi: Vec3,
+) -> (NormalsParams, Vec<NormalObject>, Vec<u32>, u32) {
+    let offset = objects.first().map_or(0, |o| o.range.start);
+    let end = objects.last().map_or(0, |o| o.range.end);
+    let count = (end - offset) as u32;
+    let mut object_of = vec![u32::MAX; count as usize];
+    let mut table = Vec::new();
+    let mut radius = 0.0f32;
+    for (k, o) in objects.iter().enumerate() {
+        for i in o.range.clone() {
+            object_of[i - offset] = k as u32;
+        }
+        let r = RADIUS_PER_SPACING * o.spacing;
+        radius = radius.max(r);
+        table.push(NormalObject {
+            radius: r,
+            layer: 0.5 * o.spacing,
+            _pad: [0.0; 2],
+        });
+    }
+    table.push(NormalObject::zeroed());
+    let size = (hi - lo).max(Vec3::splat(1e-6));
+    let h = (radius / CELLS_PER_RADIUS)
+        .max(1e-6)
+        .max((size.x * size.y * size.z / MAX_CELLS).cbrt());
+    let reach = (radius / h).ceil().max(1.0) as u32;
+    let dims = (size / h).ceil().as_uvec3().max(glam::UVec3::ONE);
+    let params = NormalsParams {
+        lo_h: lo.extend(h).to_array(),
+        dims_count: dims.extend(count).to_array(),
+        offset: offset as u32,
+        reach,
+        _pad: [0; 2],
+    };
+    (params, table, object_of, dims.x * dims.y * dims.z)
+}
+
 impl GpuNormals {
     /// Normals for `objects` (contiguous, increasing ranges) of `renderer`'s Gaussians,
     /// which must stay inside the box `lo..hi` (the simulation domain; Gaussians outside
     /// are hashed into the border cells). The renderer needs lighting set.
-    // Over 80 lines on purpose: the hash grid's buffers and passes are made in their binding
-    // order, each buffer next to the pass that binds it.
     pub fn new(
         gpu: &GpuContext,
         renderer: &GpuRenderer,
@@ -113,39 +147,8 @@ impl GpuNormals {
                 "GPU normals need uploaded Gaussians and lighting".to_string(),
             ));
         };
-        let offset = objects.first().map_or(0, |o| o.range.start);
-        let end = objects.last().map_or(0, |o| o.range.end);
-        let count = (end - offset) as u32;
-        let mut object_of = vec![u32::MAX; count as usize];
-        let mut table = Vec::new();
-        let mut h = 0.0f32;
-        for (k, o) in objects.iter().enumerate() {
-            for i in o.range.clone() {
-                object_of[i - offset] = k as u32;
-            }
-            let radius = RADIUS_PER_SPACING * o.spacing;
-            h = h.max(radius);
-            table.push(NormalObject {
-                radius,
-                layer: 0.5 * o.spacing,
-                _pad: [0.0; 2],
-            });
-        }
-        let size = (hi - lo).max(Vec3::splat(1e-6));
-        let radius = h;
-        let h = (radius / CELLS_PER_RADIUS)
-            .max(1e-6)
-            .max((size.x * size.y * size.z / MAX_CELLS).cbrt());
-        let reach = (radius / h).ceil().max(1.0) as u32;
-        let dims = (size / h).ceil().as_uvec3().max(glam::UVec3::ONE);
-        let cells = dims.x * dims.y * dims.z;
-        let params = NormalsParams {
-            lo_h: lo.extend(h).to_array(),
-            dims_count: dims.extend(count).to_array(),
-            offset: offset as u32,
-            reach,
-            _pad: [0; 2],
-        };
+        let (params, table, object_of, cells) = hash_grid(objects, lo, hi);
+        let count = object_of.len() as u32;
         let init = |label: &str, contents: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -153,108 +156,42 @@ impl GpuNormals {
                 usage: wgpu::BufferUsages::STORAGE,
             })
         };
-        let params_buf = init("normals params", bytemuck::bytes_of(&params));
         let mut object_bytes = bytemuck::cast_slice::<u32, u8>(&object_of).to_vec();
         object_bytes.resize(object_bytes.len().max(16), 0);
-        let object_buf = init("normals object of", &object_bytes);
-        table.push(NormalObject::zeroed());
-        let table_buf = init("normals objects", bytemuck::cast_slice(&table));
         let n = u64::from(count);
-        let keys = storage(device, "normals keys", n * 4);
-        let values = storage(device, "normals values", n * 4);
-        let keys_alt = storage(device, "normals keys alt", n * 4);
-        let values_alt = storage(device, "normals values alt", n * 4);
-        let key_count = init("normals count", bytemuck::bytes_of(&[count, 0, 0, 0]));
-        let cell_ranges = storage(device, "normals cell ranges", u64::from(cells) * 8);
-        let sort = RadixSort::new(device, gpu.executor());
-        let scan = Scan::new(device);
-        let plan = sort.plan(
-            device,
-            &scan,
-            &SortBuffers {
-                count: &key_count,
-                keys: &keys,
-                values: &values,
-                keys_alt: &keys_alt,
-                values_alt: &values_alt,
-            },
-            count.max(1),
-            32 - cells.saturating_sub(1).leading_zeros().min(31),
-        );
-        let (sorted_keys, sorted_values) = if plan.result_in_alternates() {
-            (&keys_alt, &values_alt)
-        } else {
-            (&keys, &values)
+        let buffers = RefitBuffers {
+            params: init("normals params", bytemuck::bytes_of(&params)),
+            object_of: init("normals object of", &object_bytes),
+            objects: init("normals objects", bytemuck::cast_slice(&table)),
+            keys: storage(device, "normals keys", n * 4),
+            values: storage(device, "normals values", n * 4),
+            keys_alt: storage(device, "normals keys alt", n * 4),
+            values_alt: storage(device, "normals values alt", n * 4),
+            key_count: init("normals count", bytemuck::bytes_of(&[count, 0, 0, 0])),
+            cell_ranges: storage(device, "normals cell ranges", u64::from(cells) * 8),
+            points: storage(device, "normals points", n * 16),
         };
-        let keys_kernel = Kernel::new(
-            device,
-            "normals keys",
-            &source(include_str!("../../shaders/relight/normals_keys.wgsl")),
-            "main",
-        );
-        let points_kernel = Kernel::new(
-            device,
-            "normals points",
-            &source(include_str!("../../shaders/relight/normals_points.wgsl")),
-            "main",
-        );
-        let pca = Kernel::new(
-            device,
-            "normals pca",
-            &source(include_str!("../../shaders/relight/normals_pca.wgsl")),
-            "main",
-        );
-        let tile_ranges = Ranges::new(device);
-        let keys_bind = keys_kernel.bind_named(
-            device,
-            &[
-                ("params", &params_buf),
-                ("gaussians", gaussians),
-                ("keys", &keys),
-                ("values", &values),
-            ],
-        );
-        let ranges_bind = tile_ranges.bind(device, &key_count, sorted_keys, &cell_ranges);
-        let points = storage(device, "normals points", n * 16);
-        let points_bind = points_kernel.bind_named(
-            device,
-            &[
-                ("params", &params_buf),
-                ("gaussians", gaussians),
-                ("sorted_values", sorted_values),
-                ("object_of", &object_buf),
-                ("points", &points),
-            ],
-        );
-        let pca_bind = pca.bind_named(
-            device,
-            &[
-                ("params", &params_buf),
-                ("ranges", &cell_ranges),
-                ("sorted_values", sorted_values),
-                ("points", &points),
-                ("objects", &table_buf),
-                ("shading", shading),
-            ],
-        );
-        Ok(GpuNormals {
-            keys: keys_kernel,
-            points: points_kernel,
-            pca,
-            tile_ranges,
-            sort,
-            scan,
-            plan,
-            keys_bind,
-            ranges_bind,
-            points_bind,
-            pca_bind,
-            cell_ranges,
+        let passes: Vec<Box<dyn Pass<Refit>>> = vec![
+            Box::new(HashKeys::new(device)),
+            Box::new(CellSort::new(device, gpu.executor())),
+            Box::new(CellRanges::new(device)),
+            Box::new(CellPoints::new(device)),
+            Box::new(Pca::new(device)),
+        ];
+        let inputs = RefitInputs {
+            b: &buffers,
+            gaussians,
+            shading,
             count,
-            _buffers: vec![
-                params_buf, object_buf, table_buf, keys, values, keys_alt, values_alt, key_count,
-                points,
-            ],
+            cells,
+            sorted: None,
+        };
+        let bound = bind_in_order(&list(&passes), device, inputs);
+        Ok(GpuNormals {
+            passes,
+            bound,
+            buffers,
+            count,
         })
     }
 
@@ -263,22 +200,22 @@ impl GpuNormals {
         if self.count == 0 {
             return Ok(());
         }
-        let groups = self.count.div_ceil(256);
+        let at = RefitExtent {
+            b: &self.buffers,
+            count: self.count,
+        };
+        let passes = list(&self.passes);
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.clear_buffer(&self.cell_ranges, 0, None);
-        {
-            let mut c = enc.begin_compute_pass(&Default::default());
-            self.keys.dispatch(&mut c, &self.keys_bind, groups);
-            self.sort.record(&mut c, &self.scan, &self.plan);
-            self.tile_ranges
-                .kernel
-                .dispatch(&mut c, &self.ranges_bind, groups);
-            self.points.dispatch(&mut c, &self.points_bind, groups);
-            self.pca.dispatch(&mut c, &self.pca_bind, groups);
-        }
+        clear_all(&passes, &mut enc, &at);
+        let stages = crate::gpu::pass::stages(&passes, &self.bound, &at, |_| true);
+        crate::gpu::stages::record(&mut enc, "normals", &stages);
         gpu.queue.submit([enc.finish()]);
         gpu.check()
     }
+}
+
+fn list(passes: &[Box<dyn Pass<Refit>>]) -> Vec<&dyn Pass<Refit>> {
+    passes.iter().map(|p| p.as_ref()).collect()
 }
 
 /// The spacing of a set of Gaussian centres: the median distance to the 6th nearest
