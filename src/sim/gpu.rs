@@ -35,7 +35,7 @@ pub use step::layout::{
 const MAT3_BYTES: u64 = 48;
 /// The watchdog's counters (`flags` of the step passes): one word per [`WatchSlot`].
 const WATCHDOG_BYTES: u64 = WatchSlot::COUNT as u64 * 4;
-use codes::{WatchSlot, BLOCK};
+use codes::{BlockArg, WatchSlot, BLOCK};
 
 pub mod codes;
 mod p2g_path;

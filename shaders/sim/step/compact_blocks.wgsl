@@ -8,7 +8,7 @@
 @group(0) @binding(2) var<storage, read_write> active_blocks: array<u32>;
 // [x, y, z] workgroups of the node passes, [3] the number of active blocks; zeroed before
 // every step
-@group(0) @binding(3) var<storage, read_write> block_args: array<atomic<u32>, 4>;
+@group(0) @binding(3) var<storage, read_write> block_args: array<atomic<u32>, BLOCK_ARGS>;
 
 // The watchdog's counters (g2p.wgsl); [3] counts the steps since the last read: this pass
 // runs once per step, so it keeps the clock; [4] the most active blocks in a step, [5]
@@ -34,7 +34,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         return;
     }
     block_flags[b] = 0u;
-    let slot = atomicAdd(&block_args[3], 1u);
+    let slot = atomicAdd(&block_args[BLOCK_ARG_BLOCKS], 1u);
     atomicMax(&flags[WATCH_ACTIVE_BLOCKS_MAX], slot + 1u);
     if slot >= consts.pool_blocks {
         block_slot[b] = NO_SLOT;
@@ -43,7 +43,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     }
     block_slot[b] = slot;
     active_blocks[slot] = b;
-    atomicMax(&block_args[0], min(slot + 1u, MAX_GROUPS_X));
-    atomicMax(&block_args[1], slot / MAX_GROUPS_X + 1u);
-    atomicMax(&block_args[2], 1u);
+    atomicMax(&block_args[BLOCK_ARG_GROUPS_X], min(slot + 1u, MAX_GROUPS_X));
+    atomicMax(&block_args[BLOCK_ARG_GROUPS_Y], slot / MAX_GROUPS_X + 1u);
+    atomicMax(&block_args[BLOCK_ARG_GROUPS_Z], 1u);
 }

@@ -14,7 +14,7 @@
 @group(0) @binding(16) var grid_velocity_change: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(2) var<storage, read> active_blocks: array<u32>;
 // [3]: the number of active blocks (compact_blocks.wgsl)
-@group(0) @binding(3) var<storage, read> block_args: array<u32, 4>;
+@group(0) @binding(3) var<storage, read> block_args: array<u32, BLOCK_ARGS>;
 
 // A 64-bit two's-complement sum of units of 1/scale (a power of two), as f32.
 fn fixed_value(w: vec2<u32>, unit: f32) -> f32 {
@@ -39,7 +39,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
         @builtin(local_invocation_index) lid: u32) {
     read_consts();
     let slot = wid.x + wid.y * nwg.x;
-    if slot >= listed_blocks(block_args[3]) {
+    if slot >= listed_blocks(block_args[BLOCK_ARG_BLOCKS]) {
         return;
     }
     let bn = block_node(active_blocks[slot], lid);

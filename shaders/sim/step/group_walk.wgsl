@@ -111,7 +111,7 @@ struct GroupWalk {
 fn group_walk(wid: vec3<u32>, nwg: vec3<u32>, group: u32, lane: u32) -> GroupWalk {
     var w: GroupWalk;
     let slot = wid.x + wid.y * nwg.x;
-    w.ok = slot < listed_blocks(block_args[3]);
+    w.ok = slot < listed_blocks(block_args[BLOCK_ARG_BLOCKS]);
     if !w.ok {
         return w;
     }

@@ -11,13 +11,13 @@
 // as they are: no particle reads them.
 @group(0) @binding(7) var<storage, read> active_blocks: array<u32>;
 // [3]: the number of active blocks
-@group(0) @binding(8) var<storage, read> block_args: array<u32, 4>;
+@group(0) @binding(8) var<storage, read> block_args: array<u32, BLOCK_ARGS>;
 
 // Node `lid` of workgroup (wid, nwg)'s active block: not ok past the listed blocks or off
 // the grid.
 fn gathering_node(wid: vec3<u32>, nwg: vec3<u32>, lid: u32) -> BlockNode {
     let slot = wid.x + wid.y * nwg.x;
-    if slot >= listed_blocks(block_args[3]) {
+    if slot >= listed_blocks(block_args[BLOCK_ARG_BLOCKS]) {
         var none: BlockNode;
         none.ok = false;
         return none;

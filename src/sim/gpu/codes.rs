@@ -141,6 +141,47 @@ impl ReturnCase {
     }
 }
 
+/// The words of `block_args`, the active blocks' indirect dispatch that
+/// `compact_blocks.wgsl` writes: the three workgroup counts an indirect dispatch reads, in
+/// its order, then the number of blocks counted, which the node passes and
+/// [`GpuSim::active_blocks`](super::GpuSim::active_blocks) read (WGSL `BLOCK_ARG_*`, the
+/// array's length `BLOCK_ARGS`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BlockArg {
+    GroupsX,
+    GroupsY,
+    GroupsZ,
+    /// Blocks counted (those beyond the pool's capacity are counted but not listed).
+    Blocks,
+}
+
+impl BlockArg {
+    /// Every word, in order.
+    pub const ALL: [BlockArg; 4] = [
+        BlockArg::GroupsX,
+        BlockArg::GroupsY,
+        BlockArg::GroupsZ,
+        BlockArg::Blocks,
+    ];
+
+    /// Words in the buffer.
+    pub const WORDS: u32 = Self::ALL.len() as u32;
+
+    /// The word's index (WGSL `BLOCK_ARG_*`).
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    fn wgsl_name(self) -> &'static str {
+        match self {
+            BlockArg::GroupsX => "BLOCK_ARG_GROUPS_X",
+            BlockArg::GroupsY => "BLOCK_ARG_GROUPS_Y",
+            BlockArg::GroupsZ => "BLOCK_ARG_GROUPS_Z",
+            BlockArg::Blocks => "BLOCK_ARG_BLOCKS",
+        }
+    }
+}
+
 /// The watchdog's counters: one `atomic<u32>` word each in the `flags` buffer that the
 /// step passes write and [`super::gpu::GpuSim::take_watchdog`] reads once a frame (WGSL
 /// `WATCH_*`, the array's length `WATCH_SLOTS`).
@@ -230,9 +271,12 @@ pub fn step_constants() -> Vec<(&'static str, u32)> {
         .iter()
         .map(|s| (s.wgsl_name(), s.gpu_code()));
     let watch = WatchSlot::ALL.map(|w| (w.wgsl_name(), w.index() as u32));
+    let block_args = BlockArg::ALL.map(|a| (a.wgsl_name(), a.index() as u32));
     limits
         .into_iter()
         .chain([("WATCH_SLOTS", WatchSlot::COUNT)])
+        .chain([("BLOCK_ARGS", BlockArg::WORDS)])
+        .chain(block_args)
         .chain(kinds)
         .chain(shapes)
         .chain(watch)
@@ -344,6 +388,19 @@ mod tests {
             );
         }
         assert_eq!(step_constant("WATCH_SLOTS"), WatchSlot::COUNT);
+        for arg in BlockArg::ALL {
+            assert_eq!(
+                step_constant(arg.wgsl_name()),
+                arg.index() as u32,
+                "{arg:?}"
+            );
+        }
+        assert_eq!(step_constant("BLOCK_ARGS"), BlockArg::WORDS);
+        // An indirect dispatch reads its x, y, z counts from the buffer's first words.
+        assert_eq!(
+            [BlockArg::GroupsX, BlockArg::GroupsY, BlockArg::GroupsZ].map(BlockArg::index),
+            [0, 1, 2]
+        );
         for case in ReturnCase::ALL {
             assert_eq!(case.gpu_code(), step_constant(case.wgsl_name()), "{case:?}");
             assert_eq!(ReturnCase::from_gpu_code(case.gpu_code()), Some(case));
@@ -409,6 +466,44 @@ mod tests {
                 decl.contains("array<atomic<u32>, WATCH_SLOTS>"),
                 "{name}.wgsl: {decl}"
             );
+        }
+    }
+
+    /// Every pass that binds the active blocks' dispatch declares it `BLOCK_ARGS` words
+    /// long and reads its words by their names, not by indices typed by hand.
+    #[test]
+    fn every_pass_reads_the_block_dispatch_by_its_names() {
+        let files = [
+            (
+                "compact_blocks",
+                include_str!("../../../shaders/sim/step/compact_blocks.wgsl"),
+            ),
+            (
+                "grid_from_sums",
+                include_str!("../../../shaders/sim/step/grid_from_sums.wgsl"),
+            ),
+            (
+                "node_gather",
+                include_str!("../../../shaders/sim/step/node_gather.wgsl"),
+            ),
+            (
+                "group_walk",
+                include_str!("../../../shaders/sim/step/group_walk.wgsl"),
+            ),
+        ];
+        for (name, src) in files {
+            for line in src.lines().filter(|l| !l.trim_start().starts_with("//")) {
+                if line.contains("> block_args:") {
+                    assert!(
+                        line.contains("u32>, BLOCK_ARGS>") || line.contains("u32, BLOCK_ARGS>"),
+                        "{name}.wgsl: {line}"
+                    );
+                }
+                for (at, _) in line.match_indices("block_args[") {
+                    let index = &line[at + "block_args[".len()..];
+                    assert!(index.starts_with("BLOCK_ARG_"), "{name}.wgsl: {line}");
+                }
+            }
         }
     }
 }

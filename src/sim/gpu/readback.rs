@@ -38,20 +38,22 @@ impl GpuSim {
     /// [`blocks`](Self::blocks) per axis), sorted.
     pub fn active_blocks(&self, gpu: &GpuContext) -> Result<Vec<u32>, GpuError> {
         let b = &self.buffers;
+        let args = u64::from(BlockArg::WORDS) * 4;
         let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sim active blocks readback"),
-            size: 16 + b.active_blocks.size(),
+            size: args + b.active_blocks.size(),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = gpu.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(&b.block_args, 0, &staging, 0, Some(16));
-        enc.copy_buffer_to_buffer(&b.active_blocks, 0, &staging, 16, None);
+        enc.copy_buffer_to_buffer(&b.block_args, 0, &staging, 0, Some(args));
+        enc.copy_buffer_to_buffer(&b.active_blocks, 0, &staging, args, None);
         gpu.queue.submit([enc.finish()]);
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&read_buffer(gpu, &staging)?);
         // Blocks beyond the pool's capacity were counted but not listed.
-        let count = (words[3] as usize).min(words.len() - 4);
-        let mut list = words[4..4 + count].to_vec();
+        let (args, listed) = words.split_at(BlockArg::WORDS as usize);
+        let count = (args[BlockArg::Blocks.index()] as usize).min(listed.len());
+        let mut list = listed[..count].to_vec();
         list.sort_unstable();
         Ok(list)
     }

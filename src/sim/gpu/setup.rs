@@ -214,7 +214,7 @@ pub(super) fn allocate(gpu: &GpuContext, l: &Layout) -> StepBuffers {
         active_blocks: pool.active_blocks,
         block_args: device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sim block dispatch"),
-            size: 16,
+            size: u64::from(BlockArg::WORDS) * 4,
             usage: wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::INDIRECT
                 | wgpu::BufferUsages::COPY_DST
