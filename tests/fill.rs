@@ -403,6 +403,92 @@ fn selection_splits_an_object_into_static_and_simulated() {
     assert_eq!(s.particles.len(), moving);
 }
 
+/// `select: {"label": [...]}` on a capture's segments: exactly the Gaussians of the named
+/// segments move, named by number or by string.
+#[test]
+fn a_label_selection_moves_the_segments_it_names() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut cloud = surface_sphere(Vec3::splat(0.5), 0.2, 2000);
+    // Segment 7 on top, segment 3 below: as a segmentation tool writes them.
+    cloud.labels = cloud
+        .positions
+        .iter()
+        .map(|p| u16::from(p.z >= 0.5))
+        .collect();
+    cloud.label_names = vec!["3".into(), "7".into()];
+    write_ply(
+        &dir.path().join("s.ply"),
+        &cloud,
+        PlyFormat::BinaryLittleEndian,
+    )
+    .unwrap();
+    let top = cloud.positions.iter().filter(|p| p.z >= 0.5).count();
+    assert!(top > 500 && top < 1500, "{top}");
+    // `inspect` lists them, for the user to choose from.
+    let report = splatter::splat::inspect::inspect(&cloud).to_string();
+    let listed = format!("labels:        3 ({}), 7 ({top})", cloud.len() - top);
+    assert!(report.contains(&listed), "{report}");
+    // (selection, Gaussians that move, whether they are all above z = 0.5 or all below)
+    for (select, moving, above) in [
+        ("[7]", top, Some(true)),
+        (r#"["7"]"#, top, Some(true)),
+        (r#"[3, "7"]"#, cloud.len(), None),
+        ("[3]", cloud.len() - top, Some(false)),
+    ] {
+        let obj = format!(
+            r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "label": {select} }}, "particles": "gaussians" }} }}"#
+        );
+        let s = setup(&scene_text(&obj, 0.02), dir.path()).unwrap();
+        assert_eq!(s.particles.len(), moving, "{select}");
+        assert_eq!(s.static_count, cloud.len() - moving, "{select}");
+        if let Some(above) = above {
+            assert!(
+                s.particles.x.iter().all(|x| (x.z >= 0.5) == above),
+                "{select}"
+            );
+        }
+    }
+    // A segment the capture lacks is named with those it has.
+    let obj = format!(
+        r#"{{ "ply": "s.ply", "physics": {{ {MATERIAL}, "select": {{ "label": [9] }} }} }}"#
+    );
+    let err = setup(&scene_text(&obj, 0.02), dir.path())
+        .err()
+        .expect("an unknown segment")
+        .to_string();
+    assert!(
+        err.contains("objects[0].physics.select.label") && err.contains("labels: 3, 7"),
+        "{err}"
+    );
+}
+
+/// On a procedural asset the selected regions bound the solid: the lattice of the rind
+/// alone and that of every other region together are the lattice of the whole melon,
+/// split exactly.
+#[test]
+fn a_label_selection_of_an_asset_fills_only_its_regions() {
+    let dir = tempfile::tempdir().unwrap();
+    let particles = |select: &str| {
+        let obj = format!(
+            r#"{{ "procedural": {{ "shape": "watermelon", "size": [0.4, 0.3, 0.3], "spacing": 0.02 }},
+                 "transform": {{ "translate": [0.5, 0.5, 0.5] }},
+                 "physics": {{ {MATERIAL} {select} }} }}"#
+        );
+        let s = setup(&scene_text(&obj, 0.04), dir.path()).unwrap();
+        (s.particles.len(), s.static_count)
+    };
+    let (whole, none_static) = particles("");
+    let (rind, rind_static) = particles(r#", "select": { "label": ["rind"] }"#);
+    let (rest, _) = particles(r#", "select": { "label": ["white_rind", "flesh", "seeds"] }"#);
+    assert_eq!(none_static, 0);
+    assert!(
+        rind > 0 && rest > 0 && rind < whole,
+        "{rind} {rest} {whole}"
+    );
+    assert_eq!(rind + rest, whole);
+    assert!(rind_static > 0);
+}
+
 /// Scene-file errors name the field.
 #[test]
 fn bad_select_fill_and_particles_name_the_field() {
@@ -420,6 +506,18 @@ fn bad_select_fill_and_particles_name_the_field() {
         (
             r#""select": { "sphere": { "center": [0, 0, 0], "radius": 0.01 } }"#,
             "objects[0].physics.select",
+        ),
+        (
+            r#""select": { "label": [] }"#,
+            "objects[0].physics.select.label",
+        ),
+        (
+            r#""select": { "label": ["rind"] }"#,
+            "objects[0].physics.select.label",
+        ),
+        (
+            r#""select": { "label": [1.5] }"#,
+            "expected a label: a name (\"rind\") or a capture's integer segment id",
         ),
         (r#""min_opacity": 1.5"#, "objects[0].physics.min_opacity"),
         (

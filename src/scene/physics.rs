@@ -262,7 +262,7 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
-/// A region of the world selecting what moves.
+/// What of an object moves: a region of the world, or the Gaussians of some labels.
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum SelectSpec {
@@ -270,6 +270,55 @@ pub enum SelectSpec {
     Box { lo: [f64; 3], hi: [f64; 3] },
     /// The ball |x − center| ≤ radius.
     Sphere { center: [f64; 3], radius: f64 },
+    /// The Gaussians whose region label is one of these: a procedural asset's region names
+    /// (`"rind"`, `"flesh"`, …), or a capture's segments, the values of its integer vertex
+    /// property `label` (else `segment`), as numbers or strings. The object's solid is
+    /// that of the selected Gaussians (an asset's: where its selected regions are).
+    Label(Vec<LabelName>),
+}
+
+/// A label in a selection: its name, or a capture's segment id.
+#[derive(Clone, Debug, Serialize, JsonSchema, PartialEq)]
+#[serde(untagged)]
+pub enum LabelName {
+    Id(i64),
+    Name(String),
+}
+
+impl<'de> Deserialize<'de> for LabelName {
+    /// A string or an integer; anything else is an error that says so (serde's untagged
+    /// enums only say that no variant matched).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visit;
+        impl serde::de::Visitor<'_> for Visit {
+            type Value = LabelName;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a label: a name (\"rind\") or a capture's integer segment id (3)")
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<LabelName, E> {
+                Ok(LabelName::Name(v.to_string()))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> Result<LabelName, E> {
+                Ok(LabelName::Id(v))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<LabelName, E> {
+                i64::try_from(v)
+                    .map(LabelName::Id)
+                    .map_err(|_| E::invalid_value(serde::de::Unexpected::Unsigned(v), &self))
+            }
+        }
+        d.deserialize_any(Visit)
+    }
+}
+
+impl LabelName {
+    /// The label's name as the Gaussians carry it (a segment id in decimal).
+    pub fn text(&self) -> String {
+        match self {
+            LabelName::Id(id) => id.to_string(),
+            LabelName::Name(name) => name.clone(),
+        }
+    }
 }
 
 impl SelectSpec {
@@ -304,17 +353,37 @@ impl SelectSpec {
                     ));
                 }
             }
+            SelectSpec::Label(names) => {
+                if names.is_empty() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        format!("{field}.label"),
+                        "[]",
+                        "at least one label",
+                    ));
+                }
+            }
         }
         Ok(())
     }
 
-    /// Whether the point lies in the region (boundary included).
+    /// Whether the point lies in the region (boundary included). A label selection has no
+    /// extent of its own: every point (its Gaussians, or an asset's regions, bound it).
     pub fn contains(&self, p: DVec3) -> bool {
         match self {
             SelectSpec::Box { lo, hi } => p.cmpge(vec3(*lo)).all() && p.cmple(vec3(*hi)).all(),
             SelectSpec::Sphere { center, radius } => {
                 p.distance_squared(vec3(*center)) <= radius * radius
             }
+            SelectSpec::Label(_) => true,
+        }
+    }
+
+    /// Whether a Gaussian at `p` with the label `label` is selected.
+    pub fn picks(&self, p: DVec3, label: Option<&str>) -> bool {
+        match self {
+            SelectSpec::Label(names) => label.is_some_and(|l| names.iter().any(|n| n.text() == l)),
+            _ => self.contains(p),
         }
     }
 }

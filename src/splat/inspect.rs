@@ -148,6 +148,9 @@ pub struct Inspection {
     /// The support's height along `up`: the plane's, or the 1st percentile of the core's
     /// heights (the lowest dense layer).
     pub support: f32,
+    /// Each region label the Gaussians carry (a capture's segment ids, from its integer
+    /// vertex property `label` or `segment`) and how many carry it, in label order.
+    pub labels: Vec<(String, usize)>,
 }
 
 /// Names of the signed axes, in the order of [`Inspection::axis_scores`].
@@ -249,7 +252,25 @@ pub fn inspect_declared(
         cameras,
         axis_scores,
         support,
+        labels: label_counts(cloud),
     }
+}
+
+/// How many Gaussians carry each label, in label order (labels no Gaussian carries left out).
+fn label_counts(cloud: &GaussianCloud) -> Vec<(String, usize)> {
+    let mut counts = vec![0usize; cloud.label_names.len()];
+    for &l in &cloud.labels {
+        if let Some(c) = counts.get_mut(usize::from(l)) {
+            *c += 1;
+        }
+    }
+    cloud
+        .label_names
+        .iter()
+        .zip(counts)
+        .filter(|&(_, c)| c > 0)
+        .map(|(name, c)| (name.clone(), c))
+        .collect()
 }
 
 impl Inspection {

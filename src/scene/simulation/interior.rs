@@ -52,10 +52,19 @@ pub(super) fn fill_object(
     }
     let obj = &scene.objects[i];
     let physics = obj.physics.as_ref().expect("simulated");
-    let region = |p: DVec3| physics.select.as_ref().is_none_or(|s| s.contains(p));
     let (m, t) = obj.transform.affine();
     let (m, t) = (m.as_dmat3(), t.as_dvec3());
     let m_inv = m.inverse();
+    let in_labels = selected_regions(obj);
+    let region = |p: DVec3| match &physics.select {
+        None => true,
+        // An asset's solid is whole: keep where its selected regions are.
+        Some(SelectSpec::Label(_)) => in_labels.as_ref().is_none_or(|(spec, picked)| {
+            spec.region_at((m_inv * (p - t)).to_array())
+                .is_some_and(|(l, _)| picked[usize::from(l)])
+        }),
+        Some(s) => s.contains(p),
+    };
     let contains = |p: DVec3| {
         obj.procedural
             .as_ref()
@@ -131,6 +140,28 @@ pub(super) fn fill_object(
             format!("a coarser spacing or a smaller selection: {e}"),
         )
     })
+}
+
+/// For a procedural asset whose selection is by label: the asset, and per region of it
+/// whether the selection names it. `None` for other objects (a capture's solid is that of
+/// its selected Gaussians already).
+fn selected_regions(
+    obj: &crate::scene::ObjectSpec,
+) -> Option<(&crate::splat::procedural::ProceduralSpec, Vec<bool>)> {
+    let physics = obj.physics.as_ref()?;
+    let Some(SelectSpec::Label(names)) = &physics.select else {
+        return None;
+    };
+    let spec = obj
+        .procedural
+        .as_ref()
+        .filter(|s| s.shape.asset().is_some())?;
+    let picked = spec
+        .label_names()
+        .iter()
+        .map(|n| names.iter().any(|s| &s.text() == n))
+        .collect();
+    Some((spec, picked))
 }
 
 /// Fill particles of a procedural asset take the colour and label of the asset's region

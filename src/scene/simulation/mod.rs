@@ -220,6 +220,7 @@ fn select_moving(
         let physics = scene.objects[i].physics.as_ref().expect("simulated");
         if let Some(sel) = &physics.select {
             sel.validate(o, &format!("objects[{i}].physics.select"))?;
+            check_labels(o, i, sel, splats, &ranges[i])?;
         }
         let min_opacity = physics.min_opacity;
         if !(min_opacity.is_finite() && (0.0..=1.0).contains(&min_opacity)) {
@@ -237,7 +238,7 @@ fn select_moving(
                     && physics
                         .select
                         .as_ref()
-                        .is_none_or(|s| s.contains(splats.means[g].as_dvec3()))
+                        .is_none_or(|s| s.picks(splats.means[g].as_dvec3(), label_of(splats, g)))
             })
             .collect();
         if picked.is_empty() && !ranges[i].is_empty() {
@@ -256,6 +257,41 @@ fn select_moving(
         moving[i] = Some(picked);
     }
     Ok(moving)
+}
+
+/// The label Gaussian `g` carries, if any.
+fn label_of(splats: &Splats, g: usize) -> Option<&str> {
+    let l = *splats.labels.get(g)?;
+    splats.label_names.get(usize::from(l)).map(String::as_str)
+}
+
+/// A label selection names only labels that object `i`'s Gaussians (`range`) carry.
+fn check_labels(
+    o: &str,
+    i: usize,
+    select: &SelectSpec,
+    splats: &Splats,
+    range: &Range<usize>,
+) -> Result<(), SceneError> {
+    let SelectSpec::Label(names) = select else {
+        return Ok(());
+    };
+    let mut present: Vec<&str> = range.clone().filter_map(|g| label_of(splats, g)).collect();
+    present.sort_unstable();
+    present.dedup();
+    match names.iter().find(|n| !present.contains(&n.text().as_str())) {
+        None => Ok(()),
+        Some(missing) => Err(SceneError::invalid(
+            o,
+            format!("objects[{i}].physics.select.label"),
+            format!("{:?}", missing.text()),
+            if present.is_empty() {
+                "a label of the object's Gaussians (this object has none: a capture's come from an integer vertex property `label` or `segment`, an asset's are its regions)".to_string()
+            } else {
+                format!("one of the object's labels: {}", present.join(", "))
+            },
+        )),
+    }
 }
 
 /// The Gaussians of a simulation in order, and the runs they form.

@@ -66,6 +66,18 @@ impl std::fmt::Display for Inspection {
                 _ => "the lowest dense layer: 1st percentile of the heights",
             }
         )?;
+        if !self.labels.is_empty() {
+            let listed: Vec<String> = self
+                .labels
+                .iter()
+                .map(|(name, n)| format!("{name} ({n})"))
+                .collect();
+            writeln!(
+                f,
+                "labels:        {} (a scene selects them with {{\"label\": [..]}})",
+                listed.join(", ")
+            )?;
+        }
         let t = self.placement(0.0);
         let (lo, hi) = self.upright_robust_bounds();
         let size = hi - lo;
