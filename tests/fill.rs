@@ -462,6 +462,62 @@ fn a_label_selection_moves_the_segments_it_names() {
     );
 }
 
+/// `label_property` names the PLY property the segments come from: another than the
+/// default `label`/`segment`, and an error naming the file's properties when it lacks it.
+#[test]
+fn label_property_names_where_a_capture_keeps_its_segments() {
+    let dir = tempfile::tempdir().unwrap();
+    let cloud = surface_sphere(Vec3::splat(0.5), 0.2, 2000);
+    // An ASCII 3DGS PLY with two integer properties: `segment` splits by x, `instance_id`
+    // by z, so the two selections below differ.
+    let mut ply = format!("ply\nformat ascii 1.0\nelement vertex {}\n", cloud.len());
+    for p in [
+        "x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2",
+        "rot_0", "rot_1", "rot_2", "rot_3",
+    ] {
+        ply += &format!("property float {p}\n");
+    }
+    ply += "property int segment\nproperty uchar instance_id\nend_header\n";
+    for p in &cloud.positions {
+        ply += &format!(
+            "{} {} {} 0.5 0.5 0.5 2 -4 -4 -4 1 0 0 0 {} {}\n",
+            p.x,
+            p.y,
+            p.z,
+            i32::from(p.x >= 0.5),
+            u8::from(p.z >= 0.5) + 4
+        );
+    }
+    std::fs::write(dir.path().join("s.ply"), ply).unwrap();
+    let run = |extra: &str| {
+        let obj = format!(
+            r#"{{ "ply": "s.ply", {extra} "physics": {{ {MATERIAL}, "select": {{ "label": [5] }}, "particles": "gaussians" }} }}"#
+        );
+        setup(&scene_text(&obj, 0.02), dir.path()).map(|s| s.particles)
+    };
+    let top = run(r#""label_property": "instance_id","#).unwrap();
+    assert_eq!(
+        top.len(),
+        cloud.positions.iter().filter(|p| p.z >= 0.5).count()
+    );
+    assert!(top.x.iter().all(|x| x.z >= 0.5));
+    // By default the labels are `segment`'s (0 and 1): there is no segment 5.
+    let err = match run("") {
+        Ok(_) => panic!("no segment 5, accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("labels: 0, 1"), "{err}");
+    let err = match run(r#""label_property": "instance","#) {
+        Ok(_) => panic!("no such property, accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("no scalar vertex property `instance`")
+            && err.contains("segment, instance_id"),
+        "{err}"
+    );
+}
+
 /// On a procedural asset the selected regions bound the solid: the lattice of the rind
 /// alone and that of every other region together are the lattice of the whole melon,
 /// split exactly.

@@ -44,11 +44,17 @@ impl Scene {
             (Some(ply), None) => {
                 let full = self.base_dir.join(ply);
                 report.source = full.display().to_string();
-                let (cloud, read) =
-                    crate::splat::formats::read_splats(&full).map_err(|e| fail(e.to_string()))?;
+                let labels = obj.label_property.as_deref();
+                let (cloud, read) = crate::splat::formats::read_splats_labelled(&full, labels)
+                    .map_err(|e| fail(e.to_string()))?;
                 report.skipped_nonfinite = read.skipped_nonfinite;
                 report.skipped_degenerate = read.skipped_degenerate;
                 cloud
+            }
+            (None, Some(_)) if obj.label_property.is_some() => {
+                return Err(fail(
+                    "has `label_property`, which names a property of a `ply` capture, not of a procedural object (its labels are its regions)".into(),
+                ))
             }
             (None, Some(spec)) => {
                 report.source = "procedural".into();

@@ -317,6 +317,11 @@ pub struct ObjectSpec {
     /// A 3DGS PLY file, relative to the scene file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ply: Option<PathBuf>,
+    /// The integer vertex property of a PLY capture that holds its segments (its region
+    /// labels, which `physics.select` and `physics.regions` name). Default: `label`, else
+    /// `segment`, where the file has one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label_property: Option<String>,
     /// A procedural solid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub procedural: Option<ProceduralSpec>,

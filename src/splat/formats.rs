@@ -73,6 +73,15 @@ fn looks_like_gltf_json(head: &[u8]) -> bool {
 
 /// Read a splat file of any supported format (a SOG folder may be given as the folder).
 pub fn read_splats(path: &Path) -> Result<(GaussianCloud, ReadReport), SplatError> {
+    read_splats_labelled(path, None)
+}
+
+/// As [`read_splats`], a PLY's region labels from its scalar vertex property `labels`
+/// when given (only a PLY has such properties: any other format is then an error).
+pub fn read_splats_labelled(
+    path: &Path,
+    labels: Option<&str>,
+) -> Result<(GaussianCloud, ReadReport), SplatError> {
     let file = path.display().to_string();
     if path.is_dir() {
         let meta = path.join("meta.json");
@@ -93,7 +102,7 @@ pub fn read_splats(path: &Path) -> Result<(GaussianCloud, ReadReport), SplatErro
         action: "read the splat file",
         source,
     })?;
-    read_splats_bytes(&bytes, path)
+    read_splats_bytes_labelled(&bytes, path, labels)
 }
 
 /// Read a splat file from memory; `path` names it in messages (and locates a SOG
@@ -102,6 +111,15 @@ pub fn read_splats_bytes(
     bytes: &[u8],
     path: &Path,
 ) -> Result<(GaussianCloud, ReadReport), SplatError> {
+    read_splats_bytes_labelled(bytes, path, None)
+}
+
+/// As [`read_splats_bytes`], with a PLY's labels from `labels` ([`read_splats_labelled`]).
+pub fn read_splats_bytes_labelled(
+    bytes: &[u8],
+    path: &Path,
+    labels: Option<&str>,
+) -> Result<(GaussianCloud, ReadReport), SplatError> {
     let file = path.display().to_string();
     let Some(format) = detect(path, bytes) else {
         return Err(SplatError::Unknown {
@@ -109,9 +127,17 @@ pub fn read_splats_bytes(
             what: describe_start(bytes),
         });
     };
+    if let Some(name) = labels.filter(|_| format != Format::Ply) {
+        return Err(SplatError::Unsupported {
+            file,
+            format,
+            what: format!("file's labels from a property `{name}`"),
+            expected: "a PLY file: only PLY carries per-Gaussian properties of any name",
+        });
+    }
     match format {
         Format::Ply => {
-            let (cloud, r) = ply::read_ply_bytes(bytes, &file)?;
+            let (cloud, r) = ply::read_ply_bytes_labelled(bytes, &file, labels)?;
             let variant = match r.format {
                 PlyFormat::BinaryLittleEndian => "binary_little_endian",
                 PlyFormat::Ascii => "ascii",

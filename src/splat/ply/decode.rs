@@ -93,14 +93,22 @@ pub(super) struct Layout {
     /// Number of `f_rest_*` values, R = 3·(K − 1).
     rest: usize,
     has_normals: bool,
-    /// Whether a scalar `label` (or `segment`) property gives region labels.
+    /// Whether a scalar property gives region labels, and its name (`label` or `segment`
+    /// unless the reader was told another).
     has_label: bool,
+    label_name: String,
     /// Property index (within the `vertex` element) of each needed value.
     pub(super) props: Vec<usize>,
 }
 
 impl Layout {
-    pub(super) fn new(def: &ElementDef, file: &str) -> Result<Layout, PlyError> {
+    /// The layout of `def`, its region labels from the scalar property `labels` when given
+    /// (an error when the file has no such property), else from `label` or `segment`.
+    pub(super) fn new(
+        def: &ElementDef,
+        file: &str,
+        labels: Option<&str>,
+    ) -> Result<Layout, PlyError> {
         let index_of = |name: &str| def.properties.get_index_of(name);
         let rest = def
             .properties
@@ -131,11 +139,36 @@ impl Layout {
         if has_normals {
             names.extend(["nx", "ny", "nz"].iter().map(|s| s.to_string()));
         }
-        // Region labels, last: `label`, else `segment` (a list property is not a label).
-        let label = ["label", "segment"].into_iter().find(|n| {
+        // Region labels, last: the property asked for, else `label`, else `segment` (a list
+        // property is not a label).
+        let scalar = |n: &str| {
             index_of(n)
                 .is_some_and(|i| matches!(def.properties[i].data_type, PropertyType::Scalar(_)))
-        });
+        };
+        let label = match labels {
+            Some(n) if scalar(n) => Some(n),
+            Some(n) => {
+                let others: Vec<&str> = def
+                    .properties
+                    .keys()
+                    .map(String::as_str)
+                    .filter(|k| scalar(k) && !names.iter().any(|m| m == k))
+                    .collect();
+                return Err(PlyError::Invalid {
+                    file: file.to_string(),
+                    what: format!("no scalar vertex property `{n}` for the labels"),
+                    expected: if others.is_empty() {
+                        "a property of that name (this file has no scalar properties beyond the 3DGS ones)".to_string()
+                    } else {
+                        format!(
+                            "one of the file's other scalar properties: {}",
+                            others.join(", ")
+                        )
+                    },
+                });
+            }
+            None => ["label", "segment"].into_iter().find(|n| scalar(n)),
+        };
         if let Some(n) = label {
             names.push(n.to_string());
         }
@@ -167,6 +200,7 @@ impl Layout {
             rest,
             has_normals,
             has_label: label.is_some(),
+            label_name: label.unwrap_or_default().to_string(),
             props,
         })
     }
@@ -388,18 +422,18 @@ where
         cloud.normals = Vec::new();
     }
     raw_labels.truncate(kept);
-    (cloud.labels, cloud.label_names) = label_ids(&raw_labels, file)?;
+    (cloud.labels, cloud.label_names) = label_ids(&raw_labels, &lay.label_name, file)?;
     Ok((cloud, nonfinite, degenerate))
 }
 
 /// Map raw label values (integers in any numeric type) to dense ids, numbered in
 /// increasing value order and named by the value (`"3"`, `"-1"`).
-fn label_ids(raw: &[f64], file: &str) -> Result<(Vec<u16>, Vec<String>), PlyError> {
+fn label_ids(raw: &[f64], property: &str, file: &str) -> Result<(Vec<u16>, Vec<String>), PlyError> {
     if let Some(v) = raw.iter().find(|v| !(v.fract() == 0.0 && v.abs() < 9.0e15)) {
         return Err(PlyError::Invalid {
             file: file.to_string(),
             what: format!("vertex label {v}"),
-            expected: "integer labels (property `label` or `segment`)".to_string(),
+            expected: format!("integer labels (property `{property}`)"),
         });
     }
     let mut values: Vec<i64> = raw.iter().map(|&v| v as i64).collect();

@@ -115,6 +115,16 @@ pub fn read_ply(path: &Path) -> Result<(GaussianCloud, PlyReport), PlyError> {
 
 /// Read a 3DGS PLY file from memory; `name` is used in error messages.
 pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyReport), PlyError> {
+    read_ply_bytes_labelled(bytes, name, None)
+}
+
+/// As [`read_ply_bytes`], the region labels from the scalar vertex property `labels` when
+/// given (else `label` or `segment`, where the file has one).
+pub fn read_ply_bytes_labelled(
+    bytes: &[u8],
+    name: &str,
+    labels: Option<&str>,
+) -> Result<(GaussianCloud, PlyReport), PlyError> {
     let file = name;
     let (header, body_start) = parse_header(bytes, file)?;
     let body = &bytes[body_start..];
@@ -139,7 +149,7 @@ pub fn read_ply_bytes(bytes: &[u8], name: &str) -> Result<(GaussianCloud, PlyRep
     };
     let elements: Vec<&ElementDef> = header.elements.values().collect();
     let vdef = elements[vertex_index];
-    let layout = Layout::new(vdef, file)?;
+    let layout = Layout::new(vdef, file, labels)?;
 
     let (mut cloud, skipped_nonfinite, skipped_degenerate) = match format {
         PlyFormat::BinaryLittleEndian => {
