@@ -4,6 +4,11 @@
 //! **simulate** (MPM, GPU) → **derive** (deformed Gaussians) → **render**
 //! (tile-based splatting, GPU) → PNG frames (writer thread).
 
+// The modules' documentation is written for the engineers who read the code: it names the
+// private pass types in the order they run, and those links resolve in
+// `cargo doc --document-private-items`.
+#![allow(rustdoc::private_intra_doc_links)]
+
 /// This program's version, as written into checkpoints and manifests.
 pub const PROGRAM_VERSION: &str = env!("CARGO_PKG_VERSION");
 

@@ -6,7 +6,7 @@
 //! and of the derive pass; the simulation's are `sim::gpu::plan::sim_needs`, next to the
 //! path choice they depend on. An array that its passes read in pages
 //! ([`crate::gpu::pages`]) must fit one buffer (`max_buffer_size`); any other must fit one
-//! storage binding ([`GpuContext::max_binding`]).
+//! storage binding ([`GpuContext::max_binding`](crate::gpu::GpuContext::max_binding)).
 
 pub use crate::gpu::limits::{check, check_gpu, Fit, LimitError, Need};
 

@@ -33,7 +33,7 @@
 //! Colliders are applied first, walls last (so the walls' guarantee holds at corners). A
 //! node in the band of two faces gets both conditions, one after the other.
 //!
-//! **Moving colliders** (`sim::kinematic`, [`step_at`]): rigid shapes on a prescribed path,
+//! **Moving colliders** (`sim::kinematic`, [`step_at`](crate::sim::cpu::step_at)): rigid shapes on a prescribed path,
 //! applied after the planar colliders in the collider's frame (relative velocity).
 //!
 //! **A surface collider** ([`SurfaceCollider`]): a static captured surface (a table, the

@@ -18,7 +18,7 @@ use crate::gpu::{Executor, GpuContext, Kernel, Shader};
 
 /// The first binding number of the projected Gaussians' pages in the passes that read
 /// them in any order (tile keys, rasterize), after their other bindings; they are bound by
-/// their names `projected_0` … `projected_{pages-1}` ([`page_var`](crate::gpu::pages::page_var)).
+/// their names `projected_0` … `projected_{pages-1}` ([`page_var`]).
 pub const PROJECTED_PAGES_AT: u32 = 8;
 
 /// Bind `buffers` by name and the projections' pages as `projected_0`, `projected_1`, …

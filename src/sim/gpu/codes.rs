@@ -183,7 +183,7 @@ impl BlockArg {
 }
 
 /// The watchdog's counters: one `atomic<u32>` word each in the `flags` buffer that the
-/// step passes write and [`super::gpu::GpuSim::take_watchdog`] reads once a frame (WGSL
+/// step passes write and [`GpuSim::take_watchdog`](crate::sim::gpu::GpuSim::take_watchdog) reads once a frame (WGSL
 /// `WATCH_*`, the array's length `WATCH_SLOTS`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WatchSlot {

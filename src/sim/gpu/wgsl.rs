@@ -6,7 +6,7 @@
 //! |---|---|---|
 //! | [`MATH`] | — | `sim_is_finite*`, `sim_diag3`, `sim_trace3`, `sim_max_abs3`, `sim_pow2_scale`, `sim_sinh` |
 //! | [`BSPLINE`] | [`crate::sim::bspline`] | `bspline_stencil(x, inv_dx) -> BsplineStencil`, `bspline_weight`, `bspline_weight_grad`, `bspline_offset`, `bspline_stencil_offset` |
-//! | [`SVD`] | [`super::svd`] | `svd3(F) -> Svd3 {u, sigma, v}`, `svd3_counted`, `svd3_compose`, `polar3(F) -> Polar3 {r, s}`, `polar_rotation` |
+//! | [`SVD`] | [`crate::sim::svd`] | `svd3(F) -> Svd3 {u, sigma, v}`, `svd3_counted`, `svd3_compose`, `polar3(F) -> Polar3 {r, s}`, `polar_rotation` |
 //! | [`ELASTICITY`] | [`crate::sim::model::elasticity`] | `elastic_kirchhoff_fixed_corotated(F, μ, λ)`, `…_svd(F, svd, μ, λ)`, `elastic_kirchhoff_neo_hookean(F, μ, κ)` |
 //!
 //! The laws' own WGSL (NACC's return mapping among them) is not here: each law's file under

@@ -43,7 +43,7 @@ impl ModelsUsed {
 }
 
 /// The WGSL of the registry, to concatenate after the simulation's library
-/// ([`super::wgsl::library`]): `SimMaterial` (`shaders/sim/material.wgsl`), the model
+/// ([`crate::sim::gpu::wgsl::library`]): `SimMaterial` (`shaders/sim/material.wgsl`), the model
 /// codes, `PlasticState`, the models' own modules and the dispatch functions, with every
 /// registered model.
 pub fn wgsl() -> String {

@@ -149,7 +149,7 @@ pub struct GpuStep {
     pub colliders: [GpuCollider; MAX_COLLIDERS],
     pub materials: [GpuMaterial; MAX_MATERIALS],
     pub kinematic: [GpuKinematic; MAX_KINEMATIC],
-    /// Last: rewritten before every substep from [`GpuSim::step`]'s uploaded poses.
+    /// Last: rewritten before every substep from [`GpuSim::step`](crate::sim::gpu::GpuSim::step)'s uploaded poses.
     pub poses: [GpuPose; MAX_KINEMATIC],
 }
 
