@@ -4,13 +4,14 @@
 //!
 //! `cargo run --release --example cpu_reference -- SCENE.json FRAMES [scene|one|two]`
 //!
-//! Prints per frame and object: pieces (≥ 1% of the particles), the largest one's share,
-//! the damaged share (α ≥ 0), the fastest particle and the wall time so far.
+//! Prints per frame and object: pieces (solid fragments with ≥ 1% of the particles), the
+//! largest one's share, the share broken through, the same count linking every particle,
+//! the fastest particle and the wall time so far.
 
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use splatter::fragments::{fragment_sizes, FragmentSummary, PIECE_SHARE};
+use splatter::fragments::{fragment_ids, solid_fragment_ids, FragmentSummary, PIECE_SHARE};
 use splatter::sim::cpu::{check, step_at};
 use splatter::sim::Separation;
 
@@ -65,26 +66,31 @@ fn main() -> Result<()> {
         }
         for body in &s.bodies {
             let points: Vec<_> = body.particles.clone().map(|i| s.particles.x[i]).collect();
-            let sum = FragmentSummary::new(&fragment_sizes(&points, s.grid.dx), PIECE_SHARE);
-            let damaged = body
+            let intact: Vec<bool> = body
                 .particles
                 .clone()
-                .filter(|&i| {
-                    s.materials[s.particles.material[i] as usize].has_hardening_state()
-                        && s.particles.alpha[i] >= 0.0
+                .map(|i| {
+                    s.materials[s.particles.material[i] as usize].damage(s.particles.alpha[i]) < 1.0
                 })
-                .count();
+                .collect();
+            let sum = FragmentSummary::of(
+                &solid_fragment_ids(&points, &intact, s.grid.dx),
+                PIECE_SHARE,
+            );
+            let linked = FragmentSummary::of(&fragment_ids(&points, s.grid.dx), PIECE_SHARE);
             let vmax = body
                 .particles
                 .clone()
                 .map(|i| s.particles.v[i].length())
                 .fold(0.0, f64::max);
             println!(
-                "frame {frame} object {}: pieces {} largest {:.3} damaged {:.3} fragments {} vmax {vmax:.2} ({:.0} s)",
+                "frame {frame} object {}: pieces {} largest {:.3} broken {:.3} linked pieces {} largest {:.3} fragments {} vmax {vmax:.2} ({:.0} s)",
                 body.object,
                 sum.pieces,
                 sum.largest_share,
-                damaged as f64 / points.len() as f64,
+                sum.rubble as f64 / points.len() as f64,
+                linked.pieces,
+                linked.largest_share,
                 sum.fragments,
                 clock.elapsed().as_secs_f64()
             );

@@ -60,8 +60,9 @@ pub(crate) enum Command {
     },
     /// Count the pieces of particle point clouds (PLY with x, y, z: `render
     /// --export-particles` files or another solver's): particles closer than the link
-    /// distance are linked, linked particles form a fragment, and a fragment of at least 1%
-    /// of the particles is a piece. One line per file and object.
+    /// distance are linked (unless a `damage` property says one is broken through: such
+    /// rubble links nothing), linked particles form a fragment, and a fragment of at least
+    /// 1% of the particles is a piece. One line per file and object.
     Fragments {
         /// The particle files.
         #[arg(required = true)]
@@ -269,8 +270,9 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "FILE")]
     pub(crate) video: Option<PathBuf>,
     /// Count the pieces each simulated object has broken into, every rendered frame:
-    /// particles closer than Δx are linked, linked particles form a fragment
-    /// (OUT_DIR/fragments.csv; the last frame's counts are printed).
+    /// particles closer than Δx and not broken through are linked, linked particles form a
+    /// fragment (OUT_DIR/fragments.csv, docs/physics.md; the last frame's counts are
+    /// printed).
     #[arg(long, conflicts_with_all = ["ply", "from_states"])]
     pub(crate) fragments: bool,
 }

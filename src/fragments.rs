@@ -6,6 +6,13 @@
 //! pieces. Used by `splatter render --fragments` (per simulated object and frame) and by
 //! the scene tests that check a fruit breaks and a jelly stays whole.
 //!
+//! A fractured body's *pieces* are its solid fragments ([`solid_fragment_ids`]): only
+//! particles that still hold together link. A particle broken through (damage 1: a brittle
+//! crack's rubble, NACC flesh without cohesion) carries no tension, so it cannot hold two
+//! chunks together; it links nothing and counts as debris. Linking every particle instead
+//! ([`fragment_ids`] over the whole body) glues chunks through the rubble that fills the
+//! cracks between them; `--fragments` reports that count too, as the linked pieces.
+//!
 //! Cost: O(N) with a hash grid of cell size `link` and a union–find over the links.
 
 use std::collections::HashMap;
@@ -17,13 +24,30 @@ pub fn fragment_sizes(points: &[DVec3], link: f64) -> Vec<usize> {
     sizes_of(&fragment_ids(points, link))
 }
 
-/// The fragment sizes of [`fragment_ids`]' numbering, largest first.
+/// The fragment sizes of [`fragment_ids`]' (or [`solid_fragment_ids`]') numbering,
+/// largest first; [`RUBBLE`] is no fragment.
 pub fn sizes_of(ids: &[u32]) -> Vec<usize> {
-    let mut sizes = vec![0; ids.iter().max().map_or(0, |&m| m as usize + 1)];
-    for &f in ids {
+    let solid = ids.iter().filter(|&&f| f != RUBBLE);
+    let mut sizes = vec![0; solid.clone().max().map_or(0, |&m| m as usize + 1)];
+    for &f in solid {
         sizes[f as usize] += 1;
     }
     sizes
+}
+
+/// The fragment id of a particle broken through: it belongs to no fragment.
+pub const RUBBLE: u32 = u32::MAX;
+
+/// The solid fragments of `points`: [`fragment_ids`] of the points with `intact[i]`,
+/// numbered by size, and [`RUBBLE`] for the others.
+pub fn solid_fragment_ids(points: &[DVec3], intact: &[bool], link: f64) -> Vec<u32> {
+    let kept: Vec<usize> = (0..points.len()).filter(|&i| intact[i]).collect();
+    let kept_points: Vec<DVec3> = kept.iter().map(|&i| points[i]).collect();
+    let mut ids = vec![RUBBLE; points.len()];
+    for (&i, id) in kept.iter().zip(fragment_ids(&kept_points, link)) {
+        ids[i] = id;
+    }
+    ids
 }
 
 /// The fragment of each of `points`, numbered by size (0: the largest; ties by the lowest
@@ -78,8 +102,10 @@ pub struct FragmentSummary {
     pub pieces: usize,
     /// Share of the particles in the largest fragment.
     pub largest_share: f64,
-    /// Particles in fragments below `min_share`.
+    /// Particles in no piece: in fragments below `min_share`, or rubble.
     pub debris: usize,
+    /// Particles broken through ([`RUBBLE`]), part of the debris.
+    pub rubble: usize,
     /// All fragments, of any size.
     pub fragments: usize,
     /// The Gaussians the body's particles move, and the share of them moved by the
@@ -89,15 +115,29 @@ pub struct FragmentSummary {
 }
 
 impl FragmentSummary {
+    /// The summary of fragments of these sizes (largest first), no rubble.
     pub fn new(sizes: &[usize], min_share: f64) -> Self {
-        let particles: usize = sizes.iter().sum();
+        Self::of_sizes(sizes, sizes.iter().sum(), min_share)
+    }
+
+    /// The summary of a numbering by [`fragment_ids`] or [`solid_fragment_ids`]: shares are
+    /// of all the particles, rubble included.
+    pub fn of(ids: &[u32], min_share: f64) -> Self {
+        Self::of_sizes(&sizes_of(ids), ids.len(), min_share)
+    }
+
+    fn of_sizes(sizes: &[usize], particles: usize, min_share: f64) -> Self {
         let floor = (min_share * particles as f64).ceil().max(1.0) as usize;
         let pieces = sizes.iter().filter(|&&s| s >= floor).count();
+        let in_pieces: usize = sizes.iter().filter(|&&s| s >= floor).sum();
         Self {
             particles,
             pieces,
-            largest_share: sizes.first().map_or(0.0, |&s| s as f64 / particles as f64),
-            debris: sizes.iter().filter(|&&s| s < floor).sum(),
+            largest_share: sizes
+                .first()
+                .map_or(0.0, |&s| s as f64 / particles.max(1) as f64),
+            debris: particles - in_pieces,
+            rubble: particles - sizes.iter().sum::<usize>(),
             fragments: sizes.len(),
             gaussians: 0,
             gaussian_largest_share: 0.0,
@@ -195,6 +235,37 @@ mod tests {
             (2, 1, 3, 190)
         );
         assert!((s.largest_share - 125.0 / 190.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rubble_links_nothing() {
+        // Two blocks whose gap is bridged by a line of points: one fragment while the
+        // bridge holds, two pieces once the bridge is rubble.
+        let h = 0.01;
+        let mut p = block(DVec3::ZERO, 4, h);
+        p.extend(block(DVec3::new(6.0 * h, 0.0, 0.0), 4, h));
+        let bridge = [4.0, 5.0].map(|i| DVec3::new(i * h, 0.0, 0.0));
+        p.extend(bridge);
+        let mut intact = vec![true; p.len()];
+        let linked = FragmentSummary::of(&fragment_ids(&p, 1.5 * h), 0.01);
+        assert_eq!((linked.pieces, linked.rubble), (1, 0));
+        assert_eq!(
+            linked,
+            FragmentSummary::of(&solid_fragment_ids(&p, &intact, 1.5 * h), 0.01)
+        );
+        intact[128] = false;
+        intact[129] = false;
+        let ids = solid_fragment_ids(&p, &intact, 1.5 * h);
+        assert_eq!(
+            (ids[0], ids[64], ids[128], ids[129]),
+            (0, 1, RUBBLE, RUBBLE)
+        );
+        let solid = FragmentSummary::of(&ids, 0.01);
+        assert_eq!(
+            (solid.pieces, solid.fragments, solid.rubble, solid.debris),
+            (2, 2, 2, 2)
+        );
+        assert!((solid.largest_share - 64.0 / 130.0).abs() < 1e-12);
     }
 
     #[test]

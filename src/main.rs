@@ -264,7 +264,7 @@ fn fragments(files: &[std::path::PathBuf], link: Option<f64>) -> Result<()> {
             let which = p.object.map(|o| format!(" object {o}")).unwrap_or_default();
             let damaged = p
                 .damaged_share
-                .map(|d| format!(", {:.1}% damaged (log Jp ≥ 0)", 100.0 * d))
+                .map(|d| format!(", {:.1}% broken through", 100.0 * d))
                 .unwrap_or_default();
             println!(
                 "{}{which}: {} particles, {} piece(s) with ≥ {:.0}% (largest {:.1}%), {} particles of debris, {} fragments in all (link {link}){damaged}",

@@ -353,7 +353,7 @@ fn fragment_rows(out: &Path) -> Vec<FragmentRow> {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray,speed_max,energy,nonfinite")
+        Some("frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray,speed_max,energy,nonfinite,linked_pieces,linked_largest_share")
     );
     lines
         .map(|l| {
@@ -432,8 +432,9 @@ fn watermelon_breaks_jelly_stays_whole_sandcastle_crumbles() {
 }
 
 /// The flat drop of the brittle watermelon (`scenes/watermelon_drop.json`) as shipped, at
-/// 64×48: it shatters by its last frame (at least 3 pieces with ≥ 1% of the particles
-/// each, none with half, under half of it broken: chunks, not rubble), and the run stays
+/// 64×48: it shatters by its last frame (at least 3 solid pieces with ≥ 1% of the
+/// particles each, none with half, under half of it broken: chunks, not rubble; pieces as
+/// `--fragments` counts them, rubble linking nothing), and the run stays
 /// sound: no particle turns non-finite, none moves faster than 1.5× the drop speed after
 /// the impact, and the kinetic plus gravitational energy never rises above its start. A
 /// law or a scene that stopped localising damage (a fruit that bounces whole, or one that

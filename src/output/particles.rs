@@ -17,7 +17,7 @@ use glam::DVec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
 
-use crate::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
+use crate::fragments::{solid_fragment_ids, FragmentSummary, PIECE_SHARE};
 use crate::output::export::frame_ply_path;
 use crate::output::write_atomically;
 use crate::scene::simulation::SimulationSetup;
@@ -183,6 +183,7 @@ pub fn read(path: &Path) -> Result<ParticleFile> {
 pub struct ObjectPieces {
     /// The `object` index; `None` when the file has no `object` property.
     pub object: Option<i64>,
+    /// Its pieces; with a `damage` property, particles broken through link nothing.
     pub summary: FragmentSummary,
     /// Share of the object's particles whose damage is 1 (from `damage`, or for files
     /// without it, NACC's reading of `log_jp`: α ≥ 0).
@@ -206,8 +207,13 @@ impl ParticleFile {
                     .filter(|&i| self.object.as_ref().is_none_or(|o| Some(o[i]) == object))
                     .collect();
                 let points: Vec<DVec3> = members.iter().map(|&i| self.x[i]).collect();
+                // Rubble links nothing where the file says which particles are broken.
+                let intact: Vec<bool> = match &self.damage {
+                    Some(d) => members.iter().map(|&i| d[i] < 1.0).collect(),
+                    None => vec![true; members.len()],
+                };
                 let summary =
-                    FragmentSummary::new(&sizes_of(&fragment_ids(&points, link)), PIECE_SHARE);
+                    FragmentSummary::of(&solid_fragment_ids(&points, &intact, link), PIECE_SHARE);
                 let damaged = match (&self.damage, &self.log_jp) {
                     (Some(d), _) => Some((d, 1.0)),
                     (None, Some(a)) => Some((a, 0.0)),

@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use glam::DVec3;
 
 use crate::derive::binding::{bound_mean, Binding};
-use crate::fragments::{fragment_ids, sizes_of, FragmentSummary, PIECE_SHARE};
+use crate::fragments::{fragment_ids, solid_fragment_ids, FragmentSummary, PIECE_SHARE};
 use crate::render::splats::mat3_from_sym3;
 use crate::scene::simulation::{Body, SimulationSetup};
 use crate::scene::Scene;
@@ -82,11 +82,14 @@ struct GaussianFragments {
 }
 
 impl GaussianFragments {
-    /// `points` are the body's particles now, `ids` their fragments.
+    /// `points` are the body's particles now, `solid` their pieces' numbering (the largest
+    /// share's) and `linked` their fragments linking every particle (astray's: a Gaussian
+    /// pulled across a crack is one whose particle is no longer beside it).
     fn new(
         body: &Body,
         points: &[DVec3],
-        ids: &[u32],
+        solid: &[u32],
+        linked: &[u32],
         state: &Particles,
         s: &SimulationSetup,
     ) -> Self {
@@ -103,7 +106,7 @@ impl GaussianFragments {
         let mut means = Vec::with_capacity(body.gaussians.len());
         for g in body.gaussians.clone() {
             let (p, offset) = bound(g);
-            in_largest += usize::from(ids[p - first] == 0);
+            in_largest += usize::from(solid[p - first] == 0);
             let a = mat3_from_sym3(s.splats.covariances[g]).as_dmat3();
             let f = state.f[p];
             let rest = symmetric_eigen(a).0.max_element();
@@ -118,7 +121,7 @@ impl GaussianFragments {
             .gaussians
             .clone()
             .zip(&nearest.particle)
-            .filter(|&(g, &q)| ids[bound(g).0 - first] != ids[q as usize])
+            .filter(|&(g, &q)| linked[bound(g).0 - first] != linked[q as usize])
             .count();
         let gaussians = body.gaussians.len();
         GaussianFragments {
@@ -130,10 +133,22 @@ impl GaussianFragments {
     }
 }
 
+/// One simulated object's fragments at a recorded frame.
+#[derive(Clone, Debug)]
+pub struct ObjectFragments {
+    /// The object's name (or `objects[i]`), as a CSV field.
+    pub name: String,
+    pub frame: u32,
+    /// Its pieces: solid fragments, rubble linking nothing ([`crate::fragments`]).
+    pub pieces: FragmentSummary,
+    /// Its fragments linking every particle, rubble included.
+    pub linked: FragmentSummary,
+}
+
 /// The open `fragments.csv` and the last frame's counts.
 pub struct FragmentLog {
     file: std::io::BufWriter<std::fs::File>,
-    last: Vec<(String, u32, FragmentSummary)>,
+    last: Vec<ObjectFragments>,
 }
 
 impl FragmentLog {
@@ -152,7 +167,7 @@ impl FragmentLog {
         if !append {
             writeln!(
                 file,
-                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray,speed_max,energy,nonfinite"
+                "frame,object,particles,pieces,largest_share,debris,fragments,damaged_share,height,gaussians,gaussian_largest_share,stretch,astray,speed_max,energy,nonfinite,linked_pieces,linked_largest_share"
             )?;
         }
         Ok(Self {
@@ -171,17 +186,20 @@ impl FragmentLog {
         self.last.clear();
         for body in &s.bodies {
             let points: Vec<DVec3> = body.particles.clone().map(|i| state.x[i]).collect();
-            let damaged = body
+            let intact: Vec<bool> = body
                 .particles
                 .clone()
-                .filter(|&i| s.materials[state.material[i] as usize].damage(state.alpha[i]) >= 1.0)
-                .count();
+                .map(|i| s.materials[state.material[i] as usize].damage(state.alpha[i]) < 1.0)
+                .collect();
+            let damaged = intact.iter().filter(|&&ok| !ok).count();
             let height = height_extent(&points);
             let motion = Motion::of(body.particles.clone(), state, s.params.gravity);
-            let ids = fragment_ids(&points, s.grid.dx);
-            let look = GaussianFragments::new(body, &points, &ids, state, s);
-            let summary = FragmentSummary::new(&sizes_of(&ids), PIECE_SHARE)
+            let solid = solid_fragment_ids(&points, &intact, s.grid.dx);
+            let linked = fragment_ids(&points, s.grid.dx);
+            let look = GaussianFragments::new(body, &points, &solid, &linked, state, s);
+            let summary = FragmentSummary::of(&solid, PIECE_SHARE)
                 .with_gaussians(look.gaussians, look.largest_share);
+            let linked = FragmentSummary::of(&linked, PIECE_SHARE);
             let name = scene.objects[body.object]
                 .name
                 .clone()
@@ -189,7 +207,7 @@ impl FragmentLog {
             let name = csv_field(&name);
             writeln!(
                 self.file,
-                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4},{},{:.4},{:.4},{},{:.4},{:.6e},{}",
+                "{frame},{name},{},{},{:.4},{},{},{:.4},{height:.4},{},{:.4},{:.4},{},{:.4},{:.6e},{},{},{:.4}",
                 summary.particles,
                 summary.pieces,
                 summary.largest_share,
@@ -203,30 +221,47 @@ impl FragmentLog {
                 motion.speed_max,
                 motion.energy,
                 motion.nonfinite,
+                linked.pieces,
+                linked.largest_share,
             )?;
-            self.last.push((name, frame, summary));
+            self.last.push(ObjectFragments {
+                name,
+                frame,
+                pieces: summary,
+                linked,
+            });
         }
         self.file.flush()?;
         Ok(())
     }
 
-    /// The last recorded frame, per object: name, frame, pieces.
-    pub fn last(&self) -> &[(String, u32, FragmentSummary)] {
+    /// The last recorded frame, per object.
+    pub fn last(&self) -> &[ObjectFragments] {
         &self.last
     }
 
     /// The closing lines of `--fragments`.
-    pub fn describe(last: &[(String, u32, FragmentSummary)]) -> Vec<String> {
-        last.iter().map(|(name, frame, s)| format!(
-                "fragments: {name} at frame {frame}: {} piece(s) with ≥ {:.0}% of its {} particles (largest {:.1}%), {} particles of debris, {} fragments in all; the largest moves {:.1}% of its {} Gaussians",
-                s.pieces,
-                PIECE_SHARE * 100.0,
-                s.particles,
-                s.largest_share * 100.0,
-                s.debris,
-                s.fragments,
-                s.gaussian_largest_share * 100.0,
-                s.gaussians
-            )).collect()
+    pub fn describe(last: &[ObjectFragments]) -> Vec<String> {
+        last.iter()
+            .map(|o| {
+                let (s, l) = (&o.pieces, &o.linked);
+                format!(
+                    "fragments: {} at frame {}: {} piece(s) with ≥ {:.0}% of its {} particles (largest {:.1}%), {} particles of debris ({} broken through), {} fragments in all; the largest moves {:.1}% of its {} Gaussians; linked through the broken particles: {} piece(s), largest {:.1}%",
+                    o.name,
+                    o.frame,
+                    s.pieces,
+                    PIECE_SHARE * 100.0,
+                    s.particles,
+                    s.largest_share * 100.0,
+                    s.debris,
+                    s.rubble,
+                    s.fragments,
+                    s.gaussian_largest_share * 100.0,
+                    s.gaussians,
+                    l.pieces,
+                    l.largest_share * 100.0,
+                )
+            })
+            .collect()
     }
 }

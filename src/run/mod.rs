@@ -19,7 +19,7 @@ mod input;
 pub mod preview;
 mod scene_run;
 
-pub use fragments::FragmentLog;
+pub use fragments::{FragmentLog, ObjectFragments};
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -27,7 +27,6 @@ use std::time::Instant;
 use anyhow::{bail, Result};
 
 use crate::farm::Chunk;
-use crate::fragments::FragmentSummary;
 use crate::frames::FrameSet;
 use crate::gpu::GpuContext;
 use crate::output::manifest::{ChunkSettings, FrameTiming, Manifest, ManifestWriter, Settings};
@@ -162,7 +161,7 @@ pub struct Summary {
     pub png_workers: usize,
     pub manifest: PathBuf,
     /// `--fragments`: each simulated object's pieces at the last rendered frame.
-    pub fragments: Vec<(String, u32, FragmentSummary)>,
+    pub fragments: Vec<ObjectFragments>,
 }
 
 impl Summary {
@@ -429,7 +428,7 @@ impl Job {
         &self,
         result: Result<()>,
         sink: Sink,
-        fragments: Vec<(String, u32, FragmentSummary)>,
+        fragments: Vec<ObjectFragments>,
         on_event: &mut dyn FnMut(Event),
     ) -> Result<Summary> {
         let Sink {
