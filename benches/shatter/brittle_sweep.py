@@ -4,7 +4,8 @@
 Each run is scenes/watermelon_drop.json with its brittle materials' mean strength scaled
 (the flesh's sigma_bar; rind and white rind keep their ratio to it), dropped at another
 speed, or on another grid, then rendered with --fragments and measured on its last frame
-(pieces with >= 1% of the particles, the largest one's share, the damaged share) and over
+(solid pieces with >= 1% of the particles, the largest one's share, the share broken
+through, and the count linking every particle) and over
 all frames (the fastest particle over the drop speed).
 
 Usage:
@@ -138,6 +139,9 @@ def measure(out, at):
             "largest_share": float(last["largest_share"]),
             "damaged_share": float(last["damaged_share"]),
             "debris": int(last["debris"]),
+            "linked_pieces": int(last.get("linked_pieces") or 0),
+            "linked_largest_share": float(last.get("linked_largest_share") or 0),
+            "seed_shift": int(name.split("_seed")[1]) if "_seed" in name else 0,
             "frame": int(last["frame"]),
             "end_frame": int(end["frame"]),
             "end_pieces": int(end["pieces"]),
@@ -156,11 +160,12 @@ def report(out, chart=None, at=None):
     rows = measure(out, at)
     json.dump(rows, open(os.path.join(out, "sweep.json"), "w"), indent=1)
     print(f"Frame {at}, and each run's last frame:\n")
-    print("| σ̄ flesh (Pa) | drop (m/s) | Δx (m) | particles | pieces ≥ 1% | largest | damaged | debris | last frame: pieces, largest | v_max / v_drop | wall (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for r in sorted(rows, key=lambda r: (r["dx"] != max(x["dx"] for x in rows), r["speed"], r["strength"])):
-        print(f"| {r['strength']:g} | {r['speed']:g} | {r['dx']:g} | {r['particles']} | {r['pieces']} "
-              f"| {r['largest_share']:.1%} | {r['damaged_share']:.1%} | {r['debris']} "
+    print("| σ̄ flesh (Pa) | drop (m/s) | Δx (m) | seed shift | particles | pieces ≥ 1% | largest | broken | linked through rubble: pieces, largest | last frame: pieces, largest | v_max / v_drop | wall (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in sorted(rows, key=lambda r: (r["dx"] != max(x["dx"] for x in rows), r["seed_shift"], r["speed"], r["strength"])):
+        print(f"| {r['strength']:g} | {r['speed']:g} | {r['dx']:g} | {r['seed_shift']} | {r['particles']} | {r['pieces']} "
+              f"| {r['largest_share']:.1%} | {r['damaged_share']:.1%} "
+              f"| {r['linked_pieces']}, {r['linked_largest_share']:.1%} "
               f"| {r['end_frame']}: {r['end_pieces']}, {r['end_largest_share']:.1%} "
               f"| {r['speed_ratio']:.2f} | {r['wall_s'] or 0:.0f} |")
     if chart:
@@ -168,23 +173,34 @@ def report(out, chart=None, at=None):
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
         dx0 = max(r["dx"] for r in rows)
-        base = [r for r in rows if r["dx"] == dx0]
-        fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+        base = [r for r in rows if r["dx"] == dx0 and r["seed_shift"] == 0]
+        fig, axes = plt.subplots(1, 3, figsize=(15, 4))
         for speed in sorted({r["speed"] for r in base}):
-            pts = sorted((r["strength"], r["pieces"], r["largest_share"]) for r in base if r["speed"] == speed)
-            axes[0].plot([p[0] for p in pts], [p[1] for p in pts], "o-", label=f"{speed:g} m/s")
-            axes[1].plot([p[0] for p in pts], [p[2] for p in pts], "o-", label=f"{speed:g} m/s")
+            pts = sorted((r["strength"], r["pieces"], r["largest_share"], r["damaged_share"])
+                         for r in base if r["speed"] == speed)
+            for k in range(3):
+                axes[k].plot([p[0] for p in pts], [p[k + 1] for p in pts], "o-", label=f"{speed:g} m/s")
         for r in rows:
-            if r["dx"] != dx0:
+            if r["seed_shift"] != 0:
+                label = f"other seeds, {r['speed']:g} m/s"
+                axes[0].plot([r["strength"]], [r["pieces"]], "kx", ms=9, label=label)
+                axes[1].plot([r["strength"]], [r["largest_share"]], "kx", ms=9, label=label)
+                axes[2].plot([r["strength"]], [r["damaged_share"]], "kx", ms=9, label=label)
+            elif r["dx"] != dx0:
                 axes[0].plot([r["strength"]], [r["pieces"]], "k*", ms=12, label=f"Δx {r['dx']:g}, {r['speed']:g} m/s")
                 axes[1].plot([r["strength"]], [r["largest_share"]], "k*", ms=12, label=f"Δx {r['dx']:g}, {r['speed']:g} m/s")
+                axes[2].plot([r["strength"]], [r["damaged_share"]], "k*", ms=12, label=f"Δx {r['dx']:g}, {r['speed']:g} m/s")
         axes[0].set_xlabel("mean flesh strength σ̄ (Pa)")
-        axes[0].set_ylabel("pieces with ≥ 1% of the particles")
+        axes[0].set_ylabel("solid pieces with ≥ 1% of the particles")
         axes[1].set_xlabel("mean flesh strength σ̄ (Pa)")
         axes[1].set_ylabel("largest piece's share")
         axes[1].axhline(0.5, color="grey", ls=":")
+        axes[2].set_xlabel("mean flesh strength σ̄ (Pa)")
+        axes[2].set_ylabel("share broken through (rubble)")
         axes[0].axhline(3, color="grey", ls=":")
-        axes[0].legend(fontsize=8)
+        handles, labels = axes[0].get_legend_handles_labels()
+        unique = dict(zip(labels, handles))
+        axes[0].legend(unique.values(), unique.keys(), fontsize=8)
         fig.suptitle(f"Brittle watermelon dropped on a flat table, frame {at} (Δx {dx0:g})")
         fig.tight_layout()
         fig.savefig(chart, dpi=90)

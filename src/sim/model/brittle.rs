@@ -59,7 +59,7 @@ pub struct Brittle {
 pub struct BrittleSpec {
     /// Mean tensile strength σ̄ in Pa (> 0): the largest principal stress a particle of
     /// average strength carries before it starts to break. The shipped watermelon's flesh:
-    /// a fifth of its Young's modulus (`scenes/watermelon_drop.json`).
+    /// 160 Pa, 0.16 of its Young's modulus (`scenes/watermelon_drop.json`).
     pub strength: f64,
     /// Weibull modulus m (> 0; absent: every particle has strength σ̄): each particle's
     /// strength is drawn from a Weibull distribution of mean σ̄; a smaller m spreads the
