@@ -72,6 +72,7 @@ fn follow(gpu: &GpuContext, f: DMat3, b: DVec3) -> (f64, f64, f64) {
         boundaries: Boundaries::default(),
         transfer: Transfer::Apic,
         separation: Default::default(),
+        fields: Default::default(),
     };
     let material = [Material::fixed_corotated(1e3, 0.3)];
     let sim = GpuSim::new(gpu, &particles, &grid, &material, &params).unwrap();

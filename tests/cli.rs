@@ -1096,6 +1096,40 @@ fn bad_separation_is_reported() {
     assert_mentions(&line, &["dfg.json", "separation", "dfg", "damage_gradient"]);
 }
 
+/// `simulation.fields` with a bad value, a second wind or an unknown field: one error
+/// line naming the field and what it takes.
+#[test]
+fn bad_fields_are_reported() {
+    let wind = |drag: &str| {
+        format!(r#""fields": [{{"wind": {{"velocity": [1, 0, 0], "drag": {drag}}}}}],"#)
+    };
+    let line = render_scene_error("drag.json", &sim_scene(1, &wind("0"), 200.0), &[]);
+    assert_mentions(
+        &line,
+        &["drag.json", "simulation.fields[0].wind.drag", "0", "> 0"],
+    );
+    let two = r#""fields": [{"wind": {"velocity": [1, 0, 0], "drag": 2}}, {"wind": {"velocity": [0, 1, 0], "drag": 2}}],"#;
+    let line = render_scene_error("two.json", &sim_scene(1, two, 200.0), &[]);
+    assert_mentions(
+        &line,
+        &["two.json", "simulation.fields[1].wind", "at most one wind"],
+    );
+    let falloff =
+        r#""fields": [{"attractor": {"point": [0, 0, 0], "strength": 1, "falloff": -1}}],"#;
+    let line = render_scene_error("falloff.json", &sim_scene(1, falloff, 200.0), &[]);
+    assert_mentions(
+        &line,
+        &[
+            "falloff.json",
+            "simulation.fields[0].attractor.falloff",
+            "-1",
+        ],
+    );
+    let gale = r#""fields": [{"gale": {}}],"#;
+    let line = render_scene_error("gale.json", &sim_scene(1, gale, 200.0), &[]);
+    assert_mentions(&line, &["gale.json", "gale", "wind", "attractor"]);
+}
+
 /// A step far above the CFL bound: a warning names the suggested Δt, then the watchdog
 /// stops the run with one error line naming the frame and the likely cause; frames written
 /// before stay complete.

@@ -19,6 +19,7 @@ fn params(dt: f64, gravity: DVec3, boundaries: Boundaries) -> StepParams {
         boundaries,
         transfer: Transfer::Apic,
         separation: Default::default(),
+        fields: Default::default(),
     }
 }
 

@@ -71,6 +71,7 @@ fn deform_and_derive_lit(
         boundaries: Boundaries::default(),
         transfer: Transfer::Apic,
         separation: Default::default(),
+        fields: Default::default(),
     };
     let sim = GpuSim::new(
         gpu,
@@ -226,6 +227,7 @@ fn jelly_cube_is_simulated_derived_and_rendered_on_the_gpu() {
         },
         transfer: Transfer::Apic,
         separation: Default::default(),
+        fields: Default::default(),
     };
     let sim = GpuSim::new(&gpu, &particles, &grid, &[material], &params).unwrap();
     let mut renderer = GpuRenderer::new(&gpu);

@@ -98,6 +98,7 @@ fn params(dt: f64, boundaries: Boundaries) -> StepParams {
         boundaries,
         transfer: Transfer::Apic,
         separation: Default::default(),
+        fields: Default::default(),
     }
 }
 

@@ -34,6 +34,7 @@ fn params(dt: f64, separation: Separation, transfer: Transfer) -> StepParams {
         },
         transfer,
         separation,
+        fields: Default::default(),
     }
 }
 

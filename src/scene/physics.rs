@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 pub use super::material::{MaterialSpec, ModelName};
 use super::SceneError;
-use crate::sim::{BoundaryKind, Condition, Separation, Transfer};
+use crate::sim::{Attractor, BoundaryKind, Condition, Fields, Separation, Transfer, Wind};
 
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.8]
@@ -66,6 +66,122 @@ pub struct SimulationSpec {
     /// path.
     #[serde(default)]
     pub separation: SeparationSpec,
+    /// Force fields over the whole simulation, each `{"wind": {..}}` or
+    /// `{"attractor": {..}}` (at most one of each; docs/method.md §2.5).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fields: Vec<FieldSpec>,
+}
+
+/// One of `simulation.fields`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum FieldSpec {
+    /// A wind: the material takes its velocity at rate `drag`, dv/dt = drag (w − v).
+    Wind(WindSpec),
+    /// A pull towards a point (a push away when `strength` < 0).
+    Attractor(AttractorSpec),
+}
+
+/// `{"wind": {..}}`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    /// The wind's velocity w in m/s.
+    pub velocity: [f64; 3],
+    /// k in 1/s (> 0): how fast the material takes the wind's velocity (a body at rest
+    /// reaches 1 − e^{−kt} of it).
+    pub drag: f64,
+}
+
+/// `{"attractor": {..}}`.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AttractorSpec {
+    /// The point p it pulls towards, in m.
+    pub point: [f64; 3],
+    /// The acceleration towards p close to it, in m/s² (negative: away from p).
+    pub strength: f64,
+    /// r in m (> 0): at distance d the acceleration is scaled by r² / (r² + d²), half at r.
+    pub falloff: f64,
+}
+
+/// The step's fields from `simulation.fields`, validated.
+pub fn build_fields(specs: &[FieldSpec], origin: &str) -> Result<Fields, SceneError> {
+    let mut fields = Fields::default();
+    for (i, spec) in specs.iter().enumerate() {
+        let at = |name: &str| format!("simulation.fields[{i}].{name}");
+        match spec {
+            FieldSpec::Wind(w) => {
+                if fields.wind.is_some() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        at("wind"),
+                        "a second wind",
+                        "at most one wind",
+                    ));
+                }
+                finite3(origin, &at("wind.velocity"), w.velocity)?;
+                if !(w.drag.is_finite() && w.drag > 0.0) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        at("wind.drag"),
+                        w.drag,
+                        "a drag rate in 1/s > 0",
+                    ));
+                }
+                fields.wind = Some(Wind {
+                    velocity: DVec3::from(w.velocity),
+                    drag: w.drag,
+                });
+            }
+            FieldSpec::Attractor(a) => {
+                if fields.attractor.is_some() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        at("attractor"),
+                        "a second attractor",
+                        "at most one attractor",
+                    ));
+                }
+                finite3(origin, &at("attractor.point"), a.point)?;
+                if !a.strength.is_finite() {
+                    return Err(SceneError::invalid(
+                        origin,
+                        at("attractor.strength"),
+                        a.strength,
+                        "an acceleration in m/s² (finite)",
+                    ));
+                }
+                if !(a.falloff.is_finite() && a.falloff > 0.0) {
+                    return Err(SceneError::invalid(
+                        origin,
+                        at("attractor.falloff"),
+                        a.falloff,
+                        "a distance in m > 0",
+                    ));
+                }
+                fields.attractor = Some(Attractor {
+                    point: DVec3::from(a.point),
+                    strength: a.strength,
+                    falloff: a.falloff,
+                });
+            }
+        }
+    }
+    Ok(fields)
+}
+
+fn finite3(origin: &str, field: &str, v: [f64; 3]) -> Result<(), SceneError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            origin,
+            field,
+            format!("{v:?}"),
+            "three finite numbers",
+        ))
+    }
 }
 
 /// `simulation.separation`.

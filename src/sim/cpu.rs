@@ -23,6 +23,7 @@ use rayon::prelude::*;
 
 use super::boundary::{Boundaries, PlaneCollider};
 use super::bspline::Stencil;
+use super::fields::Fields;
 use super::grid::{FarField, Grid, NO_CELL};
 use super::kinematic::{KinematicCollider, RigidPose};
 use super::material::Material;
@@ -233,17 +234,19 @@ pub fn p2g(
 /// Grid update (docs/method.md §2 step 2): v_i = p_i/m_i where m_i > 0 (0 elsewhere), v_i += Δt g,
 /// then the colliders and the domain walls (module docs).
 pub fn grid_update(grid: &mut Grid, dt: f64, gravity: DVec3, boundaries: &Boundaries) {
-    grid_update_at(grid, dt, gravity, boundaries, &[], 0.0);
+    grid_update_at(grid, dt, gravity, &Fields::default(), boundaries, &[], 0.0);
 }
 
-/// [`grid_update`] with moving colliders (`sim::kinematic`) at their pose at `time`
-/// seconds, applied after the planar colliders and before the walls.
+/// [`grid_update`] with the simulation's force fields (after gravity, [`Fields::apply`]) and
+/// moving colliders (`sim::kinematic`) at their pose at `time` seconds, applied after the
+/// planar colliders and before the walls.
 // Over 80 lines on purpose: one node's conditions in their order (colliders, moving colliders,
 // surface, walls), for one and for two fields.
 pub fn grid_update_at(
     grid: &mut Grid,
     dt: f64,
     gravity: DVec3,
+    fields: &Fields,
     boundaries: &Boundaries,
     kinematic: &[KinematicCollider],
     time: f64,
@@ -293,7 +296,7 @@ pub fn grid_update_at(
             (idx / (nx * ny)) as u32,
         )
     };
-    let trial = |m: f64, p: DVec3| p / m + gravity * dt;
+    let trial = |m: f64, p: DVec3, x: DVec3| fields.apply(p / m + gravity * dt, x, dt);
     if grid.far.mass.is_empty() {
         grid.velocity
             .par_iter_mut()
@@ -302,7 +305,8 @@ pub fn grid_update_at(
             .for_each(|(idx, (v_out, (&m, &p)))| {
                 *v_out = if m > 0.0 {
                     let i = node_of(idx);
-                    constrain(i, lo + i.as_dvec3() * dx, trial(m, p))
+                    let x = lo + i.as_dvec3() * dx;
+                    constrain(i, x, trial(m, p, x))
                 } else {
                     DVec3::ZERO
                 };
@@ -319,8 +323,10 @@ pub fn grid_update_at(
         .enumerate()
         .for_each(|(idx, (v_near, v_far))| {
             let (m_near, m_far) = (mass[idx], far.mass[idx]);
-            let mut near = (m_near > 0.0).then(|| trial(m_near, momentum[idx]));
-            let mut other = (m_far > 0.0).then(|| trial(m_far, far.momentum[idx]));
+            let i = node_of(idx);
+            let x = lo + i.as_dvec3() * dx;
+            let mut near = (m_near > 0.0).then(|| trial(m_near, momentum[idx], x));
+            let mut other = (m_far > 0.0).then(|| trial(m_far, far.momentum[idx], x));
             if let (Some(a), Some(b)) = (near, other) {
                 let (a, b) = contact(
                     (m_near, a, far.near_mass_gradient[idx]),
@@ -328,8 +334,6 @@ pub fn grid_update_at(
                 );
                 (near, other) = (Some(a), Some(b));
             }
-            let i = node_of(idx);
-            let x = lo + i.as_dvec3() * dx;
             *v_near = near.map_or(DVec3::ZERO, |v| constrain(i, x, v));
             *v_far = other.map_or(DVec3::ZERO, |v| constrain(i, x, v));
         });
@@ -468,7 +472,15 @@ pub fn step_at(
         params.separation,
     );
     let (dt, g) = (params.dt, params.gravity);
-    grid_update_at(grid, dt, g, &params.boundaries, kinematic, time);
+    grid_update_at(
+        grid,
+        dt,
+        g,
+        &params.fields,
+        &params.boundaries,
+        kinematic,
+        time,
+    );
     g2p(
         particles,
         grid,

@@ -40,6 +40,7 @@
 pub mod boundary;
 pub mod bspline;
 pub mod cpu;
+pub mod fields;
 pub mod frame;
 pub mod gpu;
 pub mod grid;
@@ -54,6 +55,7 @@ pub mod time_step;
 
 pub use boundary::{Boundaries, BoundaryKind, Condition, DomainWalls, PlaneCollider, WALL_BAND};
 pub use bspline::Stencil;
+pub use fields::{Attractor, Fields, Wind};
 pub use grid::Grid;
 pub use material::{cfl_dt, Material};
 pub use model::elasticity::Lame;

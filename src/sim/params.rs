@@ -3,6 +3,7 @@
 use glam::DVec3;
 
 use super::boundary::Boundaries;
+use super::fields::Fields;
 use super::separation::Separation;
 
 /// How velocity moves between particles and grid (docs/method.md §2, *Transfers*).
@@ -43,6 +44,8 @@ pub struct StepParams {
     pub boundaries: Boundaries,
     pub transfer: Transfer,
     pub separation: Separation,
+    /// Wind and attractor over the whole simulation (none by default).
+    pub fields: Fields,
 }
 
 impl StepParams {
@@ -60,6 +63,7 @@ impl StepParams {
             },
             transfer: Transfer::Apic,
             separation: Separation::None,
+            fields: Default::default(),
         }
     }
 }

@@ -85,6 +85,16 @@ struct SimStep {
     mass_exponent: i32,
     momentum_exponent: i32,
     speed_bound: f32,
+    // the force fields (sim::fields): wind velocity and drag k (0: no wind), attractor
+    // point, acceleration (0: none) and falloff r²
+    wind: vec3<f32>,
+    wind_drag: f32,
+    attractor: vec3<f32>,
+    attractor_strength: f32,
+    attractor_falloff2: f32,
+    _fields_pad0: u32,
+    _fields_pad1: u32,
+    _fields_pad2: u32,
     surface: SurfaceCondition,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,

@@ -128,12 +128,31 @@ fn node_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
     if mass <= 0.0 {
         return vec3<f32>(0.0);
     }
-    return constrained_velocity(i, trial_velocity(momentum, mass));
+    return constrained_velocity(i, trial_velocity(i, momentum, mass));
 }
 
-// p/m + Δt g: the velocity before the boundary conditions.
-fn trial_velocity(momentum: vec3<f32>, mass: f32) -> vec3<f32> {
-    return momentum / mass + consts.gravity * consts.dt;
+// p/m + Δt g, then the force fields: node i's velocity before the boundary conditions.
+fn trial_velocity(i: vec3<u32>, momentum: vec3<f32>, mass: f32) -> vec3<f32> {
+    return sim_fields(i, momentum / mass + consts.gravity * consts.dt);
+}
+
+// The wind and the attractor on velocity v at node i (sim::fields::Fields::apply): the
+// attractor's acceleration a r² / (r² + d²) towards p, then v ← w + (v − w) e^{−kΔt}.
+// Without fields (k = 0, a = 0) v is returned as it came.
+fn sim_fields(i: vec3<u32>, v_in: vec3<f32>) -> vec3<f32> {
+    var v = v_in;
+    if step.attractor_strength != 0.0 {
+        let d = step.attractor - (consts.lo + vec3<f32>(i) * consts.dx);
+        let d2 = dot(d, d);
+        if d2 > 1e-24 {
+            let r2 = step.attractor_falloff2;
+            v += d * (step.attractor_strength * r2 / ((r2 + d2) * sqrt(d2))) * consts.dt;
+        }
+    }
+    if step.wind_drag > 0.0 {
+        v = step.wind + (v - step.wind) * exp(-step.wind_drag * consts.dt);
+    }
+    return v;
 }
 
 // Velocity `v_in` of node i after the colliders, the moving colliders, the captured

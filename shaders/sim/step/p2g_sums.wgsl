@@ -51,10 +51,10 @@ fn finish_node(node: vec3<u32>, idx: u32, near: FieldSums, far: FieldSums, carry
     var v_near = vec3<f32>(0.0);
     var v_far = vec3<f32>(0.0);
     if near.m > 0.0 {
-        v_near = trial_velocity(near.p, near.m);
+        v_near = trial_velocity(node, near.p, near.m);
     }
     if far.m > 0.0 {
-        v_far = trial_velocity(far.p, far.m);
+        v_far = trial_velocity(node, far.p, far.m);
     }
     if near.m > 0.0 && far.m > 0.0 {
         let c = field_contact(near.m, v_near, near.g, far.m, v_far, far.g);

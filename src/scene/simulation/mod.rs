@@ -175,6 +175,7 @@ pub fn prepare(
         boundaries,
         transfer: spec.transfer.build(o)?,
         separation: spec.separation.into(),
+        fields: super::physics::build_fields(&spec.fields, o)?,
     };
     Ok(Some(SimulationSetup {
         splats: out.splats,

@@ -144,6 +144,14 @@ pub struct GpuStep {
     pub momentum_exponent: i32,
     /// The speed every particle must stay under for the fixed-point sums to fit (m/s).
     pub speed_bound: f32,
+    /// The wind's velocity and drag k (0: no wind), `sim::fields::Wind`.
+    pub wind: [f32; 3],
+    pub wind_drag: f32,
+    /// The attractor's point, acceleration (0: none) and falloff r², `sim::fields::Attractor`.
+    pub attractor: [f32; 3],
+    pub attractor_strength: f32,
+    pub attractor_falloff2: f32,
+    pub _fields_pad: [u32; 3],
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
@@ -223,6 +231,12 @@ impl GpuStep {
             mass_exponent: 0,
             momentum_exponent: 0,
             speed_bound: 0.0,
+            wind: [0.0; 3],
+            wind_drag: 0.0,
+            attractor: [0.0; 3],
+            attractor_strength: 0.0,
+            attractor_falloff2: 0.0,
+            _fields_pad: [0; 3],
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -251,6 +265,15 @@ impl GpuStep {
         }
         for (slot, m) in step.materials.iter_mut().zip(materials) {
             *slot = GpuMaterial::from_material(m);
+        }
+        if let Some(w) = &params.fields.wind {
+            step.wind = w.velocity.as_vec3().to_array();
+            step.wind_drag = w.drag as f32;
+        }
+        if let Some(a) = &params.fields.attractor {
+            step.attractor = a.point.as_vec3().to_array();
+            step.attractor_strength = a.strength as f32;
+            step.attractor_falloff2 = (a.falloff * a.falloff) as f32;
         }
         Ok(step)
     }
@@ -359,6 +382,11 @@ mod tests {
                 mass_exponent,
                 momentum_exponent,
                 speed_bound,
+                wind,
+                wind_drag,
+                attractor,
+                attractor_strength,
+                attractor_falloff2,
                 surface,
                 walls,
                 colliders,
