@@ -1125,6 +1125,12 @@ fn bad_fields_are_reported() {
             "-1",
         ],
     );
+    let calm = r#""fields": [{"wind": {"velocity": [1, 0, 0], "drag": 2, "gusts": {"strength": 0.5, "period": 0}}}],"#;
+    let line = render_scene_error("calm.json", &sim_scene(1, calm, 200.0), &[]);
+    assert_mentions(
+        &line,
+        &["calm.json", "simulation.fields[0].wind.gusts.period", "> 0"],
+    );
     let gale = r#""fields": [{"gale": {}}],"#;
     let line = render_scene_error("gale.json", &sim_scene(1, gale, 200.0), &[]);
     assert_mentions(&line, &["gale.json", "gale", "wind", "attractor"]);

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 pub use super::material::{MaterialSpec, ModelName};
 use super::SceneError;
-use crate::sim::{Attractor, BoundaryKind, Condition, Fields, Separation, Transfer, Wind};
+use crate::sim::{Attractor, BoundaryKind, Condition, Fields, Gusts, Separation, Transfer, Wind};
 
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -9.8]
@@ -91,6 +91,23 @@ pub struct WindSpec {
     /// k in 1/s (> 0): how fast the material takes the wind's velocity (a body at rest
     /// reaches 1 − e^{−kt} of it).
     pub drag: f64,
+    /// Gusts: the velocity scaled in time by 1 + strength · n(t / period), n a smooth seeded
+    /// noise in [−1, 1]. Absent: a steady wind.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gusts: Option<GustsSpec>,
+}
+
+/// `"gusts"` of a wind.
+#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GustsSpec {
+    /// The gusts' share of the mean wind (≥ 0; 0.5: from half to one and a half times it).
+    pub strength: f64,
+    /// Seconds between the noise's values (> 0): about how long a gust lasts.
+    pub period: f64,
+    /// Seed of the noise (default 0): the same seed, the same gusts.
+    #[serde(default)]
+    pub seed: u32,
 }
 
 /// `{"attractor": {..}}`.
@@ -112,54 +129,76 @@ pub fn build_fields(specs: &[FieldSpec], origin: &str) -> Result<Fields, SceneEr
         let at = |name: &str| format!("simulation.fields[{i}].{name}");
         match spec {
             FieldSpec::Wind(w) => {
-                if fields.wind.is_some() {
-                    return Err(SceneError::invalid(
-                        origin,
-                        at("wind"),
-                        "a second wind",
-                        "at most one wind",
-                    ));
-                }
+                let first = fields.wind.is_none();
+                require(
+                    first,
+                    origin,
+                    at("wind"),
+                    "a second wind",
+                    "at most one wind",
+                )?;
                 finite3(origin, &at("wind.velocity"), w.velocity)?;
-                if !(w.drag.is_finite() && w.drag > 0.0) {
-                    return Err(SceneError::invalid(
-                        origin,
-                        at("wind.drag"),
-                        w.drag,
-                        "a drag rate in 1/s > 0",
-                    ));
-                }
+                require(
+                    w.drag.is_finite() && w.drag > 0.0,
+                    origin,
+                    at("wind.drag"),
+                    w.drag,
+                    "a drag rate in 1/s > 0",
+                )?;
+                let gusts = match &w.gusts {
+                    None => None,
+                    Some(g) => {
+                        require(
+                            g.strength.is_finite() && g.strength >= 0.0,
+                            origin,
+                            at("wind.gusts.strength"),
+                            g.strength,
+                            "a share of the wind ≥ 0",
+                        )?;
+                        require(
+                            g.period.is_finite() && g.period > 0.0,
+                            origin,
+                            at("wind.gusts.period"),
+                            g.period,
+                            "a time in s > 0",
+                        )?;
+                        Some(Gusts {
+                            strength: g.strength,
+                            period: g.period,
+                            seed: g.seed,
+                        })
+                    }
+                };
                 fields.wind = Some(Wind {
                     velocity: DVec3::from(w.velocity),
                     drag: w.drag,
+                    gusts,
                 });
             }
             FieldSpec::Attractor(a) => {
-                if fields.attractor.is_some() {
-                    return Err(SceneError::invalid(
-                        origin,
-                        at("attractor"),
-                        "a second attractor",
-                        "at most one attractor",
-                    ));
-                }
+                let first = fields.attractor.is_none();
+                require(
+                    first,
+                    origin,
+                    at("attractor"),
+                    "a second attractor",
+                    "at most one attractor",
+                )?;
                 finite3(origin, &at("attractor.point"), a.point)?;
-                if !a.strength.is_finite() {
-                    return Err(SceneError::invalid(
-                        origin,
-                        at("attractor.strength"),
-                        a.strength,
-                        "an acceleration in m/s² (finite)",
-                    ));
-                }
-                if !(a.falloff.is_finite() && a.falloff > 0.0) {
-                    return Err(SceneError::invalid(
-                        origin,
-                        at("attractor.falloff"),
-                        a.falloff,
-                        "a distance in m > 0",
-                    ));
-                }
+                require(
+                    a.strength.is_finite(),
+                    origin,
+                    at("attractor.strength"),
+                    a.strength,
+                    "an acceleration in m/s² (finite)",
+                )?;
+                require(
+                    a.falloff.is_finite() && a.falloff > 0.0,
+                    origin,
+                    at("attractor.falloff"),
+                    a.falloff,
+                    "a distance in m > 0",
+                )?;
                 fields.attractor = Some(Attractor {
                     point: DVec3::from(a.point),
                     strength: a.strength,
@@ -171,17 +210,30 @@ pub fn build_fields(specs: &[FieldSpec], origin: &str) -> Result<Fields, SceneEr
     Ok(fields)
 }
 
-fn finite3(origin: &str, field: &str, v: [f64; 3]) -> Result<(), SceneError> {
-    if v.iter().all(|x| x.is_finite()) {
+/// `Ok` when `ok`, else the error naming `field`, its `value` and what it takes.
+fn require(
+    ok: bool,
+    origin: &str,
+    field: String,
+    value: impl std::fmt::Display,
+    expected: &str,
+) -> Result<(), SceneError> {
+    if ok {
         Ok(())
     } else {
-        Err(SceneError::invalid(
-            origin,
-            field,
-            format!("{v:?}"),
-            "three finite numbers",
-        ))
+        Err(SceneError::invalid(origin, field, value, expected))
     }
+}
+
+fn finite3(origin: &str, field: &str, v: [f64; 3]) -> Result<(), SceneError> {
+    let ok = v.iter().all(|x| x.is_finite());
+    require(
+        ok,
+        origin,
+        field.to_string(),
+        format!("{v:?}"),
+        "three finite numbers",
+    )
 }
 
 /// `simulation.separation`.

@@ -296,7 +296,7 @@ pub fn grid_update_at(
             (idx / (nx * ny)) as u32,
         )
     };
-    let trial = |m: f64, p: DVec3, x: DVec3| fields.apply(p / m + gravity * dt, x, dt);
+    let trial = |m: f64, p: DVec3, x: DVec3| fields.apply(p / m + gravity * dt, x, dt, time);
     if grid.far.mass.is_empty() {
         grid.velocity
             .par_iter_mut()

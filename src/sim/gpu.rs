@@ -72,6 +72,8 @@ pub struct GpuSim {
     /// The step constants as uploaded (moving colliders are added by `set_kinematic`).
     consts: GpuStep,
     kinematic: Vec<KinematicCollider>,
+    /// A gusty wind, whose velocity the step constants take per substep.
+    gusty_wind: Option<super::Wind>,
     /// Two-field separation (its buffers are sized to the pool).
     separation: bool,
     dt: f64,
@@ -83,6 +85,16 @@ pub struct GpuSim {
     /// A copy of the particle state ([`GpuSim::save_state`]), made only while the grid pool
     /// can overflow.
     saved: Option<Vec<wgpu::Buffer>>,
+}
+
+/// A buffer of per-substep records that the step copies into its constants.
+fn copy_source<T: Pod>(gpu: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
+    gpu.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::COPY_SRC,
+        })
 }
 
 fn mat3_from_gpu(m: &[[f32; 4]; 3]) -> DMat3 {
@@ -221,6 +233,7 @@ impl GpuSim {
             sort_bits,
             consts: step,
             kinematic: Vec::new(),
+            gusty_wind: params.fields.wind.filter(|w| w.varies()),
             separation,
             dt: params.dt,
             masses,
@@ -294,14 +307,7 @@ impl GpuSim {
                     .map(move |k| GpuPose::from_cpu(&k.motion.pose(t)))
             })
             .collect();
-        Some(
-            gpu.device
-                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("sim kinematic poses"),
-                    contents: bytemuck::cast_slice(&poses),
-                    usage: wgpu::BufferUsages::COPY_SRC,
-                }),
-        )
+        Some(copy_source(gpu, "sim kinematic poses", &poses))
     }
 
     /// Copy substep `s`'s poses into the step constants (outside any compute pass, so the
@@ -318,10 +324,32 @@ impl GpuSim {
         );
     }
 
+    /// A gusty wind's velocity and drag for `steps` substeps from the current time, one
+    /// 16-byte record per substep; `None` for a steady wind or none.
+    fn upload_winds(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
+        let wind = self.gusty_wind.as_ref().filter(|_| steps > 0)?;
+        let t0 = self.time.get();
+        let records: Vec<[f32; 4]> = (0..steps)
+            .map(|s| {
+                let w = wind.velocity_at(t0 + f64::from(s) * self.dt).as_vec3();
+                [w.x, w.y, w.z, wind.drag as f32]
+            })
+            .collect();
+        Some(copy_source(gpu, "sim gusty wind", &records))
+    }
+
+    /// Copy substep `s`'s wind into the step constants (`wind` and `wind_drag`, adjacent).
+    fn copy_wind(&self, enc: &mut wgpu::CommandEncoder, winds: &wgpu::Buffer, s: u32) {
+        let at = std::mem::offset_of!(GpuStep, wind) as u64;
+        enc.copy_buffer_to_buffer(winds, u64::from(s) * 16, &self.buffers.step, at, Some(16));
+    }
+
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
-    /// Moving colliders get each substep's pose from one upload per call.
+    /// Moving colliders get each substep's pose, and a gusty wind its velocity, from one
+    /// upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
         let poses = self.upload_poses(gpu, steps);
+        let winds = self.upload_winds(gpu, steps);
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -330,6 +358,9 @@ impl GpuSim {
         for s in 0..steps {
             if let Some(p) = &poses {
                 self.copy_poses(&mut enc, p, s);
+            }
+            if let Some(w) = &winds {
+                self.copy_wind(&mut enc, w, s);
             }
             let which = if s == 0 {
                 StepPasses::First

@@ -55,7 +55,7 @@ pub mod time_step;
 
 pub use boundary::{Boundaries, BoundaryKind, Condition, DomainWalls, PlaneCollider, WALL_BAND};
 pub use bspline::Stencil;
-pub use fields::{Attractor, Fields, Wind};
+pub use fields::{Attractor, Fields, Gusts, Wind};
 pub use grid::Grid;
 pub use material::{cfl_dt, Material};
 pub use model::elasticity::Lame;
