@@ -73,6 +73,7 @@ fn follow(gpu: &GpuContext, f: DMat3, b: DVec3) -> (f64, f64, f64) {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let material = [Material::fixed_corotated(1e3, 0.3)];
     let sim = GpuSim::new(gpu, &particles, &grid, &material, &params).unwrap();

@@ -727,6 +727,24 @@ fn schema_is_json_with_properties() {
     for key in ["output", "camera", "objects"] {
         assert!(props.contains_key(key), "schema properties lack {key}: {v}");
     }
+    // The simulation's fields and timed actions, with their parts.
+    let defs = &v["$defs"];
+    let has = |def: &str, keys: &[&str]| {
+        for key in keys {
+            assert!(
+                defs[def]["properties"].get(*key).is_some(),
+                "schema {def} lacks {key}"
+            );
+        }
+    };
+    has("SimulationSpec", &["fields"]);
+    has("PhysicsSpec", &["actions"]);
+    has(
+        "ActionSpec",
+        &["impulse", "hold", "drive", "region", "from", "to"],
+    );
+    has("ImpulseSpec", &["acceleration", "force"]);
+    has("DriveSpec", &["velocity", "path"]);
 }
 
 /// `splatter info` lists the adapters, best first, four lines each (name, device type and
@@ -1134,6 +1152,54 @@ fn bad_fields_are_reported() {
     let gale = r#""fields": [{"gale": {}}],"#;
     let line = render_scene_error("gale.json", &sim_scene(1, gale, 200.0), &[]);
     assert_mentions(&line, &["gale.json", "gale", "wind", "attractor"]);
+}
+
+/// Bad timed actions: each bad value is one error line naming the file, the field, the
+/// value and what was expected, and nothing is rendered.
+#[test]
+fn bad_actions_are_reported() {
+    let with = |actions: &str| {
+        sim_scene(1, "", 200.0).replace(
+            r#""velocity": [0, 0, -1]}"#,
+            &format!(r#""velocity": [0, 0, -1], "actions": [{actions}]}}"#),
+        )
+    };
+    assert!(with("{}").contains(r#""actions": [{}]"#), "test setup");
+    let cases: [(&str, &[&str]); 4] = [
+        (
+            r#"{"hold": {}, "from": 0.2, "to": 0.1}"#,
+            &[
+                "window.json",
+                "objects[0].physics.actions[0].to",
+                "0.1",
+                "after `from`",
+            ],
+        ),
+        (
+            r#"{"impulse": {"acceleration": [0, 0, "up"]}}"#,
+            &["window.json", "\"up\"", "expected f64"],
+        ),
+        (
+            r#"{"hold": {}, "region": {"sphere": {"center": [0, 0, 0], "radius": 0.01}}}"#,
+            &[
+                "window.json",
+                "objects[0].physics.actions[0].region",
+                "none of the object's particles",
+            ],
+        ),
+        (
+            r#"{"drive": {"velocity": [0, 0, 1], "path": [{"time": 0, "position": [0, 0, 0]}]}}"#,
+            &[
+                "window.json",
+                "objects[0].physics.actions[0].drive",
+                "exactly one of",
+            ],
+        ),
+    ];
+    for (actions, words) in cases {
+        let line = render_scene_error("window.json", &with(actions), &[]);
+        assert_mentions(&line, words);
+    }
 }
 
 /// A step far above the CFL bound: a warning names the suggested Δt, then the watchdog

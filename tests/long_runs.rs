@@ -80,6 +80,21 @@ fn killed_run_resumes_to_the_frames_of_an_uninterrupted_run() {
     }
 }
 
+/// A run killed inside the windows of timed actions (a push on the cube's top from 0.1 s
+/// to 0.25 s, a hold of its bottom from 0.15 s; the checkpoint is at frame 4, 0.167 s)
+/// resumes to the uninterrupted run's very bytes: the actions follow the step's clock.
+#[test]
+fn a_run_killed_inside_an_action_window_resumes_to_the_same_frames() {
+    let scene = sim_scene(9, 200.0).replace(
+        r#""velocity": [0, 0, -1],"#,
+        r#""velocity": [0, 0, -1], "actions": [
+          {"impulse": {"acceleration": [6, 0, 0]}, "region": {"box": {"lo": [0, 0, 0.36], "hi": [1, 1, 1]}}, "from": 0.1, "to": 0.25},
+          {"hold": {}, "region": {"box": {"lo": [0, 0, 0], "hi": [1, 1, 0.34]}}, "from": 0.15}],"#,
+    );
+    assert!(scene.contains("impulse"), "test setup");
+    killed_run_resumes(&scene);
+}
+
 /// With Δt following the motion closely (`cfl_velocity` 0.02: the falling cube's speed
 /// sets the step, and its stop on the ground changes it) the step count differs from
 /// frame to frame, and a killed run still resumes to the uninterrupted run's very bytes:

@@ -587,6 +587,7 @@ fn new_faces_of_a_split_cube_get_face_normals_when_recomputed() {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     for gpu in gpus() {
         let sim = GpuSim::new(&gpu, &particles, &grid, &materials, &params).unwrap();

@@ -20,6 +20,7 @@ fn params(dt: f64, gravity: DVec3, boundaries: Boundaries) -> StepParams {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     }
 }
 

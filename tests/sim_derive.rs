@@ -72,6 +72,7 @@ fn deform_and_derive_lit(
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let sim = GpuSim::new(
         gpu,
@@ -228,6 +229,7 @@ fn jelly_cube_is_simulated_derived_and_rendered_on_the_gpu() {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let sim = GpuSim::new(&gpu, &particles, &grid, &[material], &params).unwrap();
     let mut renderer = GpuRenderer::new(&gpu);

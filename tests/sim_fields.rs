@@ -29,6 +29,7 @@ fn params(fields: Fields) -> StepParams {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields,
+        actions: Default::default(),
     }
 }
 

@@ -99,6 +99,7 @@ fn params(dt: f64, boundaries: Boundaries) -> StepParams {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     }
 }
 

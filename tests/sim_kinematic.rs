@@ -25,6 +25,7 @@ fn params(dt: f64, gravity: DVec3, walls: DomainWalls) -> StepParams {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     }
 }
 

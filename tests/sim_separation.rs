@@ -35,6 +35,7 @@ fn params(dt: f64, separation: Separation, transfer: Transfer) -> StepParams {
         transfer,
         separation,
         fields: Default::default(),
+        actions: Default::default(),
     }
 }
 

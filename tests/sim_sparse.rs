@@ -37,6 +37,7 @@ fn fruit() -> (Particles, Grid, Vec<Material>, StepParams) {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     (p, grid, vec![material], params)
 }
@@ -187,6 +188,7 @@ fn particles_past_the_pool_cap_are_refused_up_front() {
         transfer: Default::default(),
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let materials = [Material::fixed_corotated(1e4, 0.3)];
     let mut paths = vec![P2gPath::Fixed];

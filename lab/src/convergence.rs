@@ -172,6 +172,7 @@ fn params(dt: f64, walls: DomainWalls, colliders: Vec<PlaneCollider>) -> StepPar
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     }
 }
 

@@ -2,6 +2,7 @@
 //! then the driven nodes' velocities set (a grip pulling a bar, a plate pressing a block),
 //! then G2P. The loading of the studies that deform a specimen at a prescribed speed.
 
+use splatter::sim::actions::Acting;
 use splatter::sim::cpu::{check, g2p, grid_update, p2g};
 use splatter::sim::{Grid, Material, Particles, StepParams};
 
@@ -19,7 +20,15 @@ pub fn driven_step(
     p2g(p, grid, materials, dt, params.transfer, params.separation);
     grid_update(grid, dt, params.gravity, &params.boundaries);
     drive(grid);
-    g2p(p, grid, materials, dt, params.gravity, params.transfer);
+    g2p(
+        p,
+        grid,
+        materials,
+        dt,
+        params.gravity,
+        params.transfer,
+        &Acting::none(),
+    );
     let h = check(p, grid, dt);
     h.non_finite == 0 && h.outside == 0
 }

@@ -287,6 +287,7 @@ pub fn run(spec: &BarSpec) -> BarResult {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let t_load = spec.load_transits * transit;
     let t_rev = spec.reverse_transits * transit;

@@ -139,6 +139,7 @@ pub fn run(spec: &PressSpec) -> PressResult {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let area = (side - 2.0 * lo_m).powi(2);
     let dt0 = cfl_dt(&mat, spec.density, dx, spec.cfl);

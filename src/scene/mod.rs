@@ -8,6 +8,7 @@
 //! Parsing is strict: unknown keys are errors, and every number is checked after parsing
 //! ([`Scene::validate`]). Errors name the file, the field path and the offending value.
 
+pub mod actions;
 mod build;
 pub mod fill;
 pub mod kinematic;

@@ -211,7 +211,7 @@ pub fn build_fields(specs: &[FieldSpec], origin: &str) -> Result<Fields, SceneEr
 }
 
 /// `Ok` when `ok`, else the error naming `field`, its `value` and what it takes.
-fn require(
+pub(super) fn require(
     ok: bool,
     origin: &str,
     field: String,
@@ -225,7 +225,7 @@ fn require(
     }
 }
 
-fn finite3(origin: &str, field: &str, v: [f64; 3]) -> Result<(), SceneError> {
+pub(super) fn finite3(origin: &str, field: &str, v: [f64; 3]) -> Result<(), SceneError> {
     let ok = v.iter().all(|x| x.is_finite());
     require(
         ok,
@@ -424,6 +424,10 @@ pub struct PhysicsSpec {
     /// `"gaussians"` (every selected Gaussian is a particle, plus the fill).
     #[serde(default)]
     pub particles: ParticlesSpec,
+    /// Timed actions on regions of the object (`scene::actions`): impulses, holds and
+    /// drives, each during its window. Default none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub actions: Vec<super::actions::ActionSpec>,
 }
 
 fn is_zero(v: &f64) -> bool {

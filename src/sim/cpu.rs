@@ -21,6 +21,7 @@ pub mod textbook;
 use glam::{DMat3, DVec3, IVec3, UVec3};
 use rayon::prelude::*;
 
+use super::actions::Acting;
 use super::boundary::{Boundaries, PlaneCollider};
 use super::bspline::Stencil;
 use super::fields::Fields;
@@ -344,7 +345,9 @@ pub fn grid_update_at(
 /// is v_pic, or with a FLIP/PIC blend flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic, where
 /// Δv_i = v_i − q_i/m_i, q_i = Σ w m_p v_p ([`Grid::carried`]), is what the step's forces
 /// changed at node i. A particle whose stencil
-/// is off the grid moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged).
+/// is off the grid moves ballistically (v += Δt g, x += Δt v; F, C, α unchanged). The
+/// step's timed actions (`acting`, [`super::actions`]) then push, hold or drive their
+/// particles, before F takes C.
 // Over 80 lines on purpose: the CPU twin of one GPU pass: transfer, FLIP blend, deformation
 // and plasticity per particle.
 pub fn g2p(
@@ -354,6 +357,7 @@ pub fn g2p(
     dt: f64,
     gravity: DVec3,
     transfer: Transfer,
+    acting: &Acting,
 ) {
     let flip = transfer.flip();
     // Δv_i: the node's velocity after the grid update against the particles' own, before
@@ -428,15 +432,18 @@ pub fn g2p(
                     }
                 }
             }
-            let cp = b * inv_d;
-            let f_trial = (DMat3::IDENTITY + cp * dt) * *f;
-            *v = if flip > 0.0 {
+            let mut cp = b * inv_d;
+            let mut v_new = if flip > 0.0 {
                 (*v + dv) * flip + vp * (1.0 - flip)
             } else {
                 vp
             };
-            *c = cp;
+            let x0 = *x;
             *x += vp * dt;
+            acting.apply(p, x0, &mut v_new, &mut cp, x);
+            *v = v_new;
+            *c = cp;
+            let f_trial = (DMat3::IDENTITY + cp * dt) * *f;
             let (f_new, a_new) = materials[*mat as usize].plasticity_at(f_trial, *alpha, p as u32);
             *f = f_new;
             *alpha = a_new;
@@ -488,6 +495,7 @@ pub fn step_at(
         params.dt,
         params.gravity,
         params.transfer,
+        &params.actions.at(time, dt),
     );
     StepStats { escaped }
 }

@@ -22,7 +22,7 @@ use crate::gpu::buffers::{read_buffer, storage};
 use crate::gpu::pages::{PageRanges, Pages};
 use crate::gpu::stages;
 use crate::gpu::{GpuContext, GpuError};
-use step::layout::{mat3_to_gpu, GpuKinematic, GpuPose};
+use step::layout::{mat3_to_gpu, GpuAction, GpuKinematic, GpuPose};
 use step::{
     Binds, Extent, GridTexture, Passes, Scatter, StepBuffers, StepPasses, GRID_TEXELS_PER_ROW,
 };
@@ -74,6 +74,8 @@ pub struct GpuSim {
     kinematic: Vec<KinematicCollider>,
     /// A gusty wind, whose velocity the step constants take per substep.
     gusty_wind: Option<super::Wind>,
+    /// The timed actions, whose effects the step constants take per substep.
+    actions: Vec<super::Action>,
     /// Two-field separation (its buffers are sized to the pool).
     separation: bool,
     dt: f64,
@@ -208,7 +210,8 @@ impl GpuSim {
             P2gPath::Fixed => Some(Scatter::Fixed),
         };
         let used = crate::sim::model::ModelsUsed::of(materials);
-        let passes = Passes::new(gpu, (scatter, separation), &used);
+        let acting = !params.actions.is_empty();
+        let passes = Passes::new(gpu, (scatter, separation, acting), &used);
         let layout = Layout {
             particles,
             grid,
@@ -234,6 +237,7 @@ impl GpuSim {
             consts: step,
             kinematic: Vec::new(),
             gusty_wind: params.fields.wind.filter(|w| w.varies()),
+            actions: params.actions.list.clone(),
             separation,
             dt: params.dt,
             masses,
@@ -344,12 +348,44 @@ impl GpuSim {
         enc.copy_buffer_to_buffer(winds, u64::from(s) * 16, &self.buffers.step, at, Some(16));
     }
 
+    /// The timed actions' effects for `steps` substeps from the current time, one table of
+    /// `actions.len()` records per substep; `None` without actions.
+    fn upload_actions(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
+        if self.actions.is_empty() || steps == 0 {
+            return None;
+        }
+        let t0 = self.time.get();
+        let records: Vec<GpuAction> = (0..steps)
+            .flat_map(|s| {
+                let t = t0 + f64::from(s) * self.dt;
+                self.actions
+                    .iter()
+                    .map(move |a| GpuAction::from_cpu(a.effect(t, self.dt)))
+            })
+            .collect();
+        Some(copy_source(gpu, "sim action effects", &records))
+    }
+
+    /// Copy substep `s`'s action effects into the step constants.
+    fn copy_actions(&self, enc: &mut wgpu::CommandEncoder, effects: &wgpu::Buffer, s: u32) {
+        let size = (self.actions.len() * std::mem::size_of::<GpuAction>()) as u64;
+        let at = std::mem::offset_of!(GpuStep, actions) as u64;
+        enc.copy_buffer_to_buffer(
+            effects,
+            u64::from(s) * size,
+            &self.buffers.step,
+            at,
+            Some(size),
+        );
+    }
+
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
-    /// Moving colliders get each substep's pose, and a gusty wind its velocity, from one
-    /// upload per call.
+    /// Moving colliders get each substep's pose, a gusty wind its velocity and the timed
+    /// actions their effects, from one upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
         let poses = self.upload_poses(gpu, steps);
         let winds = self.upload_winds(gpu, steps);
+        let effects = self.upload_actions(gpu, steps);
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -361,6 +397,9 @@ impl GpuSim {
             }
             if let Some(w) = &winds {
                 self.copy_wind(&mut enc, w, s);
+            }
+            if let Some(e) = &effects {
+                self.copy_actions(&mut enc, e, s);
             }
             let which = if s == 0 {
                 StepPasses::First

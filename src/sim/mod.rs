@@ -37,6 +37,7 @@
 //! | §4.9 | damage field D_i, ∇D_p, ridge g_i, near/far partition | [`separation::partition`] |
 //! | §4.9 | two-field contact about v_cm along n̂_near − n̂_far | [`separation::contact`] |
 
+pub mod actions;
 pub mod boundary;
 pub mod bspline;
 pub mod cpu;
@@ -53,6 +54,7 @@ pub mod separation;
 pub mod svd;
 pub mod time_step;
 
+pub use actions::{Action, ActionKind, Actions, Drive};
 pub use boundary::{Boundaries, BoundaryKind, Condition, DomainWalls, PlaneCollider, WALL_BAND};
 pub use bspline::Stencil;
 pub use fields::{Attractor, Fields, Gusts, Wind};

@@ -2,6 +2,7 @@
 
 use glam::DVec3;
 
+use super::actions::Actions;
 use super::boundary::Boundaries;
 use super::fields::Fields;
 use super::separation::Separation;
@@ -46,6 +47,8 @@ pub struct StepParams {
     pub separation: Separation,
     /// Wind and attractor over the whole simulation (none by default).
     pub fields: Fields,
+    /// Timed pushes, holds and drives of regions (none by default).
+    pub actions: Actions,
 }
 
 impl StepParams {
@@ -64,6 +67,7 @@ impl StepParams {
             transfer: Transfer::Apic,
             separation: Separation::None,
             fields: Default::default(),
+            actions: Default::default(),
         }
     }
 }

@@ -49,6 +49,16 @@ struct KinematicPose {
     angular_velocity: vec4<f32>,
 }
 
+// What a timed action does over the current substep (sim::actions::Effect): with
+// ACTION_PUSH, v_p += velocity; with ACTION_MOVE, x_p moves by displacement, v_p =
+// velocity and C_p = 0. Copied into `step.actions` before each substep (GpuSim::step).
+struct Action {
+    velocity: vec3<f32>,
+    mode: u32,
+    displacement: vec3<f32>,
+    _pad: u32,
+}
+
 // The captured surface collider (src/sim/boundary.rs, SurfaceCollider): `on` when the
 // buffer `surface` holds φ at every node.
 struct SurfaceCondition {
@@ -92,17 +102,21 @@ struct SimStep {
     attractor: vec3<f32>,
     attractor_strength: f32,
     attractor_falloff2: f32,
+    // timed actions in `actions`, which act on the particles whose material word has their
+    // bit (g2p.wgsl)
+    num_actions: u32,
     _fields_pad0: u32,
     _fields_pad1: u32,
-    _fields_pad2: u32,
     surface: SurfaceCondition,
     // domain faces −x, +x, −y, +y, −z, +z
     walls: array<Condition, 6>,
     colliders: array<Collider, MAX_COLLIDERS>,
     materials: array<SimMaterial, MAX_MATERIALS>,
     kinematic: array<KinematicCollider, MAX_KINEMATIC>,
-    // last: rewritten per substep
+    // rewritten per substep
     poses: array<KinematicPose, MAX_KINEMATIC>,
+    // last: rewritten per substep
+    actions: array<Action, MAX_ACTIONS>,
 }
 
 // Every step pass binds the step's constants here. Helpers below read this global rather
@@ -164,7 +178,10 @@ fn read_consts() {
 // The parameters of material i. Material 0's come from the copy read at the top of the
 // pass; other materials are read for the invocations that have them (a scene of one
 // material pays nothing per particle for its parameters).
-fn particle_material(i: u32) -> SimMaterial {
+// A particle's `material` word holds its material's index in the low MATERIAL_BITS bits
+// and the timed actions acting on it above them (sim::gpu::codes::material_word).
+fn particle_material(word: u32) -> SimMaterial {
+    let i = word & MATERIAL_INDEX_MASK;
     if i == 0u {
         return consts.material0;
     }

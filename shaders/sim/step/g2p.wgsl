@@ -1,14 +1,17 @@
 // G2P (per particle, docs/method.md §2 step 3): v_pic = Σ w v_i, C_p = (4/Δx²) Σ w v_i d_ipᵀ,
 // F ← (I + Δt C) F, x += Δt v_pic, then the material's plasticity (its law's return mapping,
 // docs/method.md §4). The particle keeps v_pic, or with a FLIP/PIC blend
-// flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic. A particle whose stencil is off the grid
-// moves ballistically. Mirrors `cpu::g2p`.
+// flip · (v_p + Σ w Δv_i) + (1 − flip) · v_pic. The timed actions (ACTIONS, a constant G2p
+// defines; sim::actions) then push, hold or drive their particles, before F takes C. A
+// particle whose stencil is off the grid moves ballistically. Mirrors `cpu::g2p`.
 
 @group(0) @binding(1) var<storage, read_write> x_mass: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read_write> v_volume: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> deformation: array<mat3x3<f32>>;
 @group(0) @binding(4) var<storage, read_write> affine_velocity: array<mat3x3<f32>>;
 @group(0) @binding(5) var<storage, read_write> alpha: array<f32>;
+// Per particle: its material's index, and above MATERIAL_BITS, bit k set when
+// step.actions[k] acts on it (read only with ACTIONS).
 @group(0) @binding(6) var<storage, read> material: array<u32>;
 // The grid's nodes after the grid update: velocity xyz, mass w (common.wgsl, grid_texel).
 @group(0) @binding(7) var grid_velocity: texture_2d<f32>;
@@ -118,15 +121,31 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             }
         }
     }
-    let c = b * (4.0 / (consts.dx * consts.dx));
-    let f_trial = (SIM_IDENTITY3 + c * consts.dt) * deformation[p];
+    var c = b * (4.0 / (consts.dx * consts.dx));
     var v_new = vp;
     if flip > 0.0 {
         v_new = flip * (vv.xyz + dv) + (1.0 - flip) * vp;
     }
+    var x = xm.xyz + vp * consts.dt;
+    if ACTIONS {
+        let members = material[p] >> MATERIAL_BITS;
+        for (var k = 0u; k < step.num_actions; k++) {
+            let a = step.actions[k];
+            if (members >> k & 1u) == 0u || a.mode == ACTION_IDLE {
+                continue;
+            }
+            if a.mode == ACTION_PUSH {
+                v_new += a.velocity;
+            } else {
+                v_new = a.velocity;
+                c = mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));
+                x = xm.xyz + a.displacement;
+            }
+        }
+    }
+    let f_trial = (SIM_IDENTITY3 + c * consts.dt) * deformation[p];
     v_volume[p] = vec4<f32>(v_new, vv.w);
     affine_velocity[p] = c;
-    let x = xm.xyz + vp * consts.dt;
     x_mass[p] = vec4<f32>(x, xm.w);
     leave_key(p, x);
     let m = particle_material(material[p]);

@@ -2,6 +2,7 @@
 //! particles (lattice or one per Gaussian and fill point), fill, Gaussians and binding.
 
 use super::*;
+use crate::sim::Action;
 
 /// The simulated bodies as they are added: particles, bindings, materials, the CFL bound.
 pub(super) struct Bodies {
@@ -11,6 +12,9 @@ pub(super) struct Bodies {
     pub(super) materials: Vec<Material>,
     pub(super) warnings: Vec<String>,
     pub(super) dt_cfl: f64,
+    /// The scene's timed actions, and per particle the bits of those acting on it.
+    pub(super) actions: Vec<Action>,
+    pub(super) members: Vec<u32>,
 }
 
 impl Default for Bodies {
@@ -22,6 +26,8 @@ impl Default for Bodies {
             materials: Vec::new(),
             warnings: Vec::new(),
             dt_cfl: f64::INFINITY,
+            actions: Vec::new(),
+            members: Vec::new(),
         }
     }
 }
@@ -109,6 +115,7 @@ impl Bodies {
                 0.0,
             );
         }
+        self.add_actions(scene, i, start, &cloud, &part)?;
         // APIC: a rigid spin has velocity gradient C = [ω]×.
         let skew = glam::DMat3::from_cols(
             DVec3::new(0.0, w0.z, -w0.y),
@@ -148,6 +155,37 @@ impl Bodies {
             particles: start..self.particles.len(),
             gaussians: first..out.splats.len(),
         });
+        Ok(())
+    }
+
+    /// Object `i`'s timed actions, on its particles from `start` on (`cloud` at rest).
+    fn add_actions(
+        &mut self,
+        scene: &Scene,
+        i: usize,
+        start: usize,
+        cloud: &ParticleCloud,
+        part: &Splats,
+    ) -> Result<(), SceneError> {
+        let o = scene.origin.as_str();
+        let physics = scene.objects[i].physics.as_ref().expect("simulated");
+        let drafts = crate::scene::actions::check(o, i, &physics.actions, self.actions.len())?;
+        self.members.resize(self.particles.len(), 0);
+        if drafts.is_empty() {
+            return Ok(());
+        }
+        let labels: Vec<Option<&str>> = (0..cloud.x.len())
+            .map(|p| {
+                let l = *cloud.labels.get(p)?;
+                part.label_names.get(usize::from(l)).map(String::as_str)
+            })
+            .collect();
+        let rest = (&cloud.x[..], &labels[..], &self.particles.mass[start..]);
+        for d in drafts {
+            let bit = self.actions.len();
+            let action = d.take(o, bit, rest, &mut self.members[start..])?;
+            self.actions.push(action);
+        }
         Ok(())
     }
 

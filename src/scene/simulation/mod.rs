@@ -26,7 +26,7 @@ use crate::derive::Binding;
 use crate::render::Splats;
 use crate::sim::time_step::{StepPlan, StepRule};
 use crate::sim::{
-    cfl_dt, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams,
+    cfl_dt, Actions, Boundaries, DomainWalls, Grid, Material, Particles, PlaneCollider, StepParams,
 };
 
 /// Everything the simulate-and-render loop needs.
@@ -176,6 +176,13 @@ pub fn prepare(
         transfer: spec.transfer.build(o)?,
         separation: spec.separation.into(),
         fields: super::physics::build_fields(&spec.fields, o)?,
+        actions: Actions {
+            members: match body.actions.is_empty() {
+                true => Default::default(),
+                false => body.members.into(),
+            },
+            list: body.actions,
+        },
     };
     Ok(Some(SimulationSetup {
         splats: out.splats,

@@ -97,6 +97,7 @@ fn walls_keep_particles_on_the_grid() {
             transfer: Transfer::Apic,
             separation: Default::default(),
             fields: Default::default(),
+            actions: Default::default(),
         };
         for _ in 0..60 {
             assert_eq!(step(&mut p, &mut g, &mats, &params).escaped, 0);
@@ -159,6 +160,7 @@ fn gather_matches_scatter_and_is_deterministic() {
         transfer: Transfer::Apic,
         separation: Default::default(),
         fields: Default::default(),
+        actions: Default::default(),
     };
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()

@@ -9,6 +9,7 @@
 //! variant to its Rust type, give it its code in the `gpu_code` match below and its WGSL
 //! name in the list; the shaders then use the constant by name.
 
+use crate::sim::actions::Effect;
 use crate::sim::boundary::BoundaryKind;
 use crate::sim::kinematic::ColliderShape;
 use crate::sim::model::nacc::oracle::{Case3Variant, ReturnCase, ReturnMapping};
@@ -19,6 +20,20 @@ pub const MAX_MATERIALS: usize = 16;
 pub const MAX_COLLIDERS: usize = 8;
 /// Moving colliders a simulation may have.
 pub const MAX_KINEMATIC: usize = 4;
+pub use crate::sim::actions::MAX_ACTIONS;
+/// Bits of a particle's material word that hold its material's index (WGSL
+/// `MATERIAL_BITS`); the timed actions acting on it take the bits above.
+pub const MATERIAL_BITS: u32 = 16;
+
+/// A particle's material word on the GPU: the index of its material, and bit
+/// `MATERIAL_BITS + k` set when action k acts on it (`members`, bit k).
+pub fn material_word(material: u32, members: u32) -> u32 {
+    debug_assert!(material < 1 << MATERIAL_BITS && members < 1 << (32 - MATERIAL_BITS));
+    material | members << MATERIAL_BITS
+}
+
+const _: () =
+    assert!(MAX_MATERIALS <= 1 << MATERIAL_BITS && MAX_ACTIONS <= 32 - MATERIAL_BITS as usize);
 /// Nodes per axis of an active block of the sparse grid (docs/method.md §2; WGSL `BLOCK`).
 pub const BLOCK: u32 = 4;
 /// Nodes per row of the grid texture (WGSL `GRID_TEXELS_PER_ROW`): 64 whole blocks.
@@ -247,6 +262,32 @@ impl WatchSlot {
     }
 }
 
+/// `Action.mode` on the GPU for what a timed action does over a substep (WGSL
+/// `ACTION_*`): nothing (outside its window), a push, a move.
+pub fn effect_code(e: Option<&Effect>) -> u32 {
+    match e {
+        None => 0,
+        Some(Effect::Push(_)) => 1,
+        Some(Effect::Move { .. }) => 2,
+    }
+}
+
+/// Every `Action.mode`, with its WGSL name.
+fn effect_codes() -> [(&'static str, u32); 3] {
+    let (push, moved) = (
+        Effect::Push(glam::DVec3::ZERO),
+        Effect::Move {
+            velocity: glam::DVec3::ZERO,
+            displacement: glam::DVec3::ZERO,
+        },
+    );
+    [
+        ("ACTION_IDLE", effect_code(None)),
+        ("ACTION_PUSH", effect_code(Some(&push))),
+        ("ACTION_MOVE", effect_code(Some(&moved))),
+    ]
+}
+
 /// The constants the material modules read (`shaders/sim/model/nacc.wgsl`), name and value.
 pub fn material_constants() -> Vec<(&'static str, u32)> {
     let variants = ReturnMapping::ALL
@@ -262,6 +303,9 @@ pub fn step_constants() -> Vec<(&'static str, u32)> {
         ("MAX_MATERIALS", MAX_MATERIALS as u32),
         ("MAX_COLLIDERS", MAX_COLLIDERS as u32),
         ("MAX_KINEMATIC", MAX_KINEMATIC as u32),
+        ("MAX_ACTIONS", MAX_ACTIONS as u32),
+        ("MATERIAL_BITS", MATERIAL_BITS),
+        ("MATERIAL_INDEX_MASK", (1 << MATERIAL_BITS) - 1),
         ("BLOCK", BLOCK),
         ("BLOCK_NODES", BLOCK * BLOCK * BLOCK),
         ("GRID_TEXELS_PER_ROW", GRID_TEXELS_PER_ROW),
@@ -277,6 +321,7 @@ pub fn step_constants() -> Vec<(&'static str, u32)> {
         .chain([("WATCH_SLOTS", WatchSlot::COUNT)])
         .chain([("BLOCK_ARGS", BlockArg::WORDS)])
         .chain(block_args)
+        .chain(effect_codes())
         .chain(kinds)
         .chain(shapes)
         .chain(watch)
@@ -408,6 +453,15 @@ mod tests {
         assert_eq!(step_constant("MAX_MATERIALS") as usize, MAX_MATERIALS);
         assert_eq!(step_constant("MAX_COLLIDERS") as usize, MAX_COLLIDERS);
         assert_eq!(step_constant("MAX_KINEMATIC") as usize, MAX_KINEMATIC);
+        assert_eq!(step_constant("MAX_ACTIONS") as usize, MAX_ACTIONS);
+        let word = material_word(5, 0b101);
+        assert_eq!(word & step_constant("MATERIAL_INDEX_MASK"), 5);
+        assert_eq!(word >> step_constant("MATERIAL_BITS"), 0b101);
+        let codes = effect_codes();
+        assert_eq!(codes.map(|(_, c)| c), [0, 1, 2], "distinct modes");
+        for (name, code) in codes {
+            assert_eq!(step_constant(name), code, "{name}");
+        }
         assert_eq!(step_constant("BLOCK"), BLOCK);
         assert_eq!(step_constant("GRID_TEXELS_PER_ROW"), GRID_TEXELS_PER_ROW);
     }

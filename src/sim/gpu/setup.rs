@@ -167,6 +167,16 @@ pub(super) struct Layout<'a> {
     pub pages: Pages,
 }
 
+/// Each particle's material word: its material's index and the actions acting on it.
+fn material_words(l: &Layout) -> Vec<u32> {
+    let members = &l.params.actions.members;
+    let of = |p: usize| members.get(p).copied().unwrap_or(0);
+    let m = &l.particles.material;
+    (0..m.len())
+        .map(|p| codes::material_word(m[p], of(p)))
+        .collect()
+}
+
 /// Every buffer of the step, the particle arrays uploaded and the rest zeroed.
 pub(super) fn allocate(gpu: &GpuContext, l: &Layout) -> StepBuffers {
     let device = &gpu.device;
@@ -189,7 +199,7 @@ pub(super) fn allocate(gpu: &GpuContext, l: &Layout) -> StepBuffers {
         deformation: init(gpu, "sim F", &packed.f, true),
         affine_velocity: init(gpu, "sim C", &packed.c, true),
         alpha: init(gpu, "sim alpha", &packed.alpha, true),
-        material: init(gpu, "sim material", &l.particles.material, false),
+        material: init(gpu, "sim material", &material_words(l), false),
         keys: zeroed(gpu, "sim cell keys", nn * 4),
         values: zeroed(gpu, "sim cell values", nn * 4),
         keys_alt: zeroed(gpu, "sim cell keys alt", nn * 4),

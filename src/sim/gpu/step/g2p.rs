@@ -15,15 +15,16 @@ pub(crate) struct G2p {
 impl G2p {
     /// With `next_keys` (the gather path), G2P also writes the next step's sort keys;
     /// with `separation`, each particle reads its own field (two-field separation compiled
-    /// in).
+    /// in); with `actions`, the timed actions act on their particles.
     pub fn new(
         device: &wgpu::Device,
-        (next_keys, separation): (bool, bool),
+        (next_keys, separation, actions): (bool, bool, bool),
         used: &ModelsUsed,
     ) -> Self {
         let src = super::step_source(used)
             .define("NEXT_KEYS", next_keys)
             .define("SEPARATION", separation)
+            .define("ACTIONS", actions)
             .pass(include_str!("../../../../shaders/sim/step/g2p.wgsl"));
         G2p {
             kernel: Kernel::new(device, "sim g2p", &src, "main"),

@@ -6,6 +6,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DMat3, DVec3};
 
 use crate::gpu::GpuError;
+use crate::sim::actions::{Effect, MAX_ACTIONS};
 use crate::sim::kinematic::{ColliderShape, KinematicCollider, RigidPose};
 use crate::sim::model::PLASTIC_PARAMS;
 use crate::sim::{Condition, Grid, Material, StepParams};
@@ -110,6 +111,40 @@ impl GpuPose {
     }
 }
 
+/// `Action` of `shaders/sim/step/common.wgsl`: what one timed action does over the current
+/// substep (`sim::actions::Effect`), rewritten before every substep.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuAction {
+    /// A push's Δv, or a move's velocity.
+    pub velocity: [f32; 3],
+    /// `ACTION_IDLE`, `ACTION_PUSH` or `ACTION_MOVE` (`sim::gpu::codes`).
+    pub mode: u32,
+    /// A move's displacement.
+    pub displacement: [f32; 3],
+    pub _pad: u32,
+}
+
+impl GpuAction {
+    pub(crate) fn from_cpu(e: Option<Effect>) -> Self {
+        let v = |v: DVec3| v.as_vec3().to_array();
+        let (velocity, displacement) = match e {
+            None => (DVec3::ZERO, DVec3::ZERO),
+            Some(Effect::Push(dv)) => (dv, DVec3::ZERO),
+            Some(Effect::Move {
+                velocity,
+                displacement,
+            }) => (velocity, displacement),
+        };
+        GpuAction {
+            velocity: v(velocity),
+            mode: super::super::codes::effect_code(e.as_ref()),
+            displacement: v(displacement),
+            _pad: 0,
+        }
+    }
+}
+
 /// `SurfaceCondition` of `shaders/sim/step/common.wgsl`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -151,14 +186,18 @@ pub struct GpuStep {
     pub attractor: [f32; 3],
     pub attractor_strength: f32,
     pub attractor_falloff2: f32,
-    pub _fields_pad: [u32; 3],
+    /// Timed actions in `actions` (their membership words are a particle buffer).
+    pub num_actions: u32,
+    pub _fields_pad: [u32; 2],
     pub surface: GpuSurface,
     pub walls: [GpuCondition; 6],
     pub colliders: [GpuCollider; MAX_COLLIDERS],
     pub materials: [GpuMaterial; MAX_MATERIALS],
     pub kinematic: [GpuKinematic; MAX_KINEMATIC],
-    /// Last: rewritten before every substep from [`GpuSim::step`](crate::sim::gpu::GpuSim::step)'s uploaded poses.
+    /// Rewritten before every substep from [`GpuSim::step`](crate::sim::gpu::GpuSim::step)'s uploaded poses.
     pub poses: [GpuPose; MAX_KINEMATIC],
+    /// Last: each action's effect, rewritten before every substep as the poses.
+    pub actions: [GpuAction; MAX_ACTIONS],
 }
 
 impl GpuCondition {
@@ -194,6 +233,10 @@ pub enum SimSetupError {
     TooManyColliders(usize),
     #[error("{0} moving colliders given; the GPU step supports at most {MAX_KINEMATIC}")]
     TooManyKinematic(usize),
+    #[error("{0} timed actions given; the GPU step supports at most {MAX_ACTIONS}")]
+    TooManyActions(usize),
+    #[error("the timed actions name {members} particles' members, the simulation has {particles}")]
+    ActionMembers { members: usize, particles: usize },
     #[error("the simulation's particles reach {needed} blocks of 4³ grid nodes at the start, more than the {limit} this adapter's grid pool holds (its grid texture, 64 blocks per row of the largest 2D texture, and its sums, one storage binding): use a coarser grid (a larger simulation.dx)")]
     PoolAtLimit { needed: u32, limit: u32 },
     #[error(transparent)]
@@ -209,6 +252,16 @@ impl GpuStep {
     ) -> Result<GpuStep, SimSetupError> {
         if materials.len() > MAX_MATERIALS {
             return Err(SimSetupError::TooManyMaterials(materials.len()));
+        }
+        let actions = &params.actions;
+        if actions.list.len() > MAX_ACTIONS {
+            return Err(SimSetupError::TooManyActions(actions.list.len()));
+        }
+        if !actions.is_empty() && actions.members.len() != num_particles as usize {
+            return Err(SimSetupError::ActionMembers {
+                members: actions.members.len(),
+                particles: num_particles as usize,
+            });
         }
         let colliders = &params.boundaries.colliders;
         if colliders.len() > MAX_COLLIDERS {
@@ -236,7 +289,8 @@ impl GpuStep {
             attractor: [0.0; 3],
             attractor_strength: 0.0,
             attractor_falloff2: 0.0,
-            _fields_pad: [0; 3],
+            num_actions: params.actions.list.len() as u32,
+            _fields_pad: [0; 2],
             surface: match &params.boundaries.surface {
                 Some(s) => GpuSurface {
                     on: 1,
@@ -254,6 +308,7 @@ impl GpuStep {
             materials: [GpuMaterial::default(); MAX_MATERIALS],
             kinematic: [GpuKinematic::default(); MAX_KINEMATIC],
             poses: [GpuPose::default(); MAX_KINEMATIC],
+            actions: [GpuAction::default(); MAX_ACTIONS],
         };
         for (slot, c) in step.colliders.iter_mut().zip(colliders) {
             let n = c.normal.normalize();
@@ -387,14 +442,17 @@ mod tests {
                 attractor,
                 attractor_strength,
                 attractor_falloff2,
+                num_actions,
                 surface,
                 walls,
                 colliders,
                 materials,
                 kinematic,
-                poses
+                poses,
+                actions
             ]
         );
+        assert_layout!(&src, GpuAction, "Action", [velocity, mode, displacement]);
         assert_layout!(
             &src,
             GpuKinematic,

@@ -180,6 +180,7 @@ pub(crate) struct StepBuffers {
     pub deformation: wgpu::Buffer,
     pub affine_velocity: wgpu::Buffer,
     pub alpha: wgpu::Buffer,
+    /// Per particle, its material word (`codes::material_word`).
     pub material: wgpu::Buffer,
     /// Cell keys and particle values before the sort, and the sort's alternates.
     pub keys: wgpu::Buffer,
@@ -408,11 +409,12 @@ pub(crate) enum StepPasses {
 
 impl Passes {
     /// Compile the passes; a scatter path's with `scatter` (else the gather path's),
-    /// two-field separation's with `separation` (on the gather path). This is the
+    /// two-field separation's with `separation` (on the gather path), G2P with the timed
+    /// actions with `actions`. This is the
     /// algorithm of the module's documentation; a new pass goes in here.
     pub fn new(
         gpu: &GpuContext,
-        (scatter, separation): (Option<Scatter>, bool),
+        (scatter, separation, actions): (Option<Scatter>, bool, bool),
         used: &ModelsUsed,
     ) -> Passes {
         let device = &gpu.device;
@@ -450,7 +452,8 @@ impl Passes {
                 }
             }
         }
-        passes.push(Box::new(G2p::new(device, (!atomic, separation), used)));
+        let g2p = (!atomic, separation, actions);
+        passes.push(Box::new(G2p::new(device, g2p, used)));
         Passes { passes }
     }
 

@@ -98,6 +98,7 @@ mod tests {
             step_source(&all)
                 .define("NEXT_KEYS", true)
                 .define("SEPARATION", false)
+                .define("ACTIONS", true)
                 .pass(include_str!("../../../../shaders/sim/step/g2p.wgsl")),
         ];
         for src in sources {
