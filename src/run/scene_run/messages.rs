@@ -21,8 +21,17 @@ pub(super) fn describe_simulation(
     p2g: P2gPath,
     deterministic: bool,
 ) -> String {
+    let acting = &s.params.actions;
+    let actions = match acting.list.len() {
+        0 => String::new(),
+        n => format!(
+            ", {n} timed action{} on {} particles",
+            if n == 1 { "" } else { "s" },
+            acting.members.iter().filter(|m| **m != 0).count()
+        ),
+    };
     format!(
-        "simulation: {} particles moving {} Gaussians, {} materials, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame{}, P2G {}{}",
+        "simulation: {} particles moving {} Gaussians, {} materials{actions}, grid {}×{}×{} (Δx {}), Δt {:.3e} s, {} steps per frame{}, P2G {}{}",
         s.particles.len(),
         s.binding.len(),
         s.materials.len(),
