@@ -40,7 +40,8 @@ pub(crate) enum Command {
         /// Also render an overview of the upright capture over a labelled ground grid.
         #[arg(long, value_name = "FILE.png")]
         preview: Option<PathBuf>,
-        /// The capture's INRIA 3DGS cameras.json: up is the mean of its cameras' up vectors.
+        /// The capture's cameras (an INRIA cameras.json, a COLMAP model, a transforms.json or
+        /// a nerfstudio camera_path.json): up is the mean of its cameras' up vectors.
         /// Default: a cameras.json next to the capture, when there is one.
         #[arg(long, value_name = "FILE")]
         cameras: Option<PathBuf>,
@@ -219,15 +220,23 @@ pub(crate) struct RenderArgs {
     /// counts their pieces).
     #[arg(long, value_name = "DIR")]
     pub(crate) export_particles: Option<PathBuf>,
+    /// Also write the rendered frames' cameras: DIR/cameras.json (INRIA 3DGS, read back by
+    /// a `cameras_json` path or `--cameras`) and DIR/camera_path.json (a nerfstudio render
+    /// path), to match a plate in Blender or nerfstudio (docs/scene-format.md).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export_cameras: Option<PathBuf>,
     /// Quick look at a capture (any splat format) without a scene file: stood upright
     /// and orbited, framing its robust bounds.
     #[arg(long, conflicts_with = "scene")]
     pub(crate) ply: Option<PathBuf>,
-    /// With --ply: an INRIA 3DGS cameras.json to take the camera from. The capture is
-    /// then drawn untouched, in its own frame, where a trainer posed those cameras.
+    /// With --ply: a camera file to take the camera from: an INRIA 3DGS cameras.json, a
+    /// COLMAP model (its folder, e.g. sparse/0, or a file of it), a transforms.json or a
+    /// nerfstudio camera_path.json, told by its content. The capture is then drawn
+    /// untouched, in its own frame, where those cameras were posed.
     #[arg(long, requires = "ply")]
     pub(crate) cameras: Option<PathBuf>,
-    /// With --cameras: index of the camera in cameras.json (default 0).
+    /// With --cameras: index of the camera in the file (default 0; COLMAP images in the
+    /// order of their names).
     #[arg(long, requires = "cameras")]
     pub(crate) camera: Option<usize>,
     /// With --ply: which way is up in the capture (an axis: +x, -x, +y, -y, +z, -z), instead
@@ -310,6 +319,7 @@ impl RenderArgs {
             export_spz: self.export_spz,
             export_glb: self.export_glb,
             export_particles: self.export_particles,
+            export_cameras: self.export_cameras,
             resume: self.resume,
             deterministic: self.deterministic,
             p2g: self.p2g.map(P2gArg::path),

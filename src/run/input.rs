@@ -96,7 +96,10 @@ pub(super) fn quick_look(
     let (splats, report) = build_splats(&scene)?;
     let path = match cameras {
         Some(file) => {
-            let cameras = scene::from_cameras_json(file, opts.width, opts.height)?;
+            let (cameras, warnings) = scene::from_camera_file(file, opts.width, opts.height)?;
+            for w in warnings {
+                log::warn!("{w}");
+            }
             let index = camera.unwrap_or(0);
             let Some(camera) = cameras.get(index) else {
                 bail!(

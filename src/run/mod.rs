@@ -33,6 +33,7 @@ use crate::output::manifest::{ChunkSettings, FrameTiming, Manifest, ManifestWrit
 use crate::output::{frame_path, FrameWriter};
 use crate::render::gpu::{FrameTimings, RenderedImage};
 use crate::render::Splats;
+use crate::scene::cameras::export::FrameCamera;
 use crate::scene::quality::Quality;
 use crate::scene::{BuildReport, CameraPath, Scene};
 
@@ -80,6 +81,9 @@ pub struct RunOptions {
     pub export_glb: Option<PathBuf>,
     /// Also write each frame's MPM particles as a PLY point cloud into this directory.
     pub export_particles: Option<PathBuf>,
+    /// Also write the rendered frames' cameras into this directory, as an INRIA
+    /// `cameras.json` and a nerfstudio `camera_path.json` (`scene::cameras::export`).
+    pub export_cameras: Option<PathBuf>,
     /// Skip frames already written and restart the simulation from the checkpoint.
     pub resume: bool,
     /// Sum P2G in a fixed order: bit-identical frames on the same adapter.
@@ -123,6 +127,7 @@ impl Default for RunOptions {
             export_spz: None,
             export_glb: None,
             export_particles: None,
+            export_cameras: None,
             resume: false,
             deterministic: false,
             p2g: None,
@@ -292,6 +297,25 @@ impl Run {
     /// Run every frame on `gpu`, reporting progress to `on_event`.
     pub fn execute(self, gpu: &GpuContext, on_event: &mut dyn FnMut(Event)) -> Result<Summary> {
         let Run { job, source } = self;
+        if let (Some(dir), false) = (&job.opts.export_cameras, matches!(source, Source::Idle(_))) {
+            let frames: Vec<FrameCamera> = job
+                .frames
+                .iter()
+                .map(|frame| FrameCamera {
+                    frame,
+                    camera: job.path.camera(frame),
+                })
+                .collect();
+            crate::scene::cameras::export::write(dir, &frames, job.path.fps()).map_err(|e| {
+                anyhow::anyhow!("cannot write the cameras into {}: {e}", dir.display())
+            })?;
+            on_event(Event::Note(format!(
+                "cameras of {} frames: {} and {}",
+                frames.len(),
+                dir.join("cameras.json").display(),
+                dir.join("camera_path.json").display()
+            )));
+        }
         match source {
             Source::Built { splats, report } => {
                 scene_run::execute(job, splats, report, gpu, on_event)

@@ -1,83 +1,13 @@
 //! `objects[i].physics.actions`: timed impulses, holds and drives on regions of a simulated
-//! object (`sim::actions`, docs/method.md §2.6): the scene file's form, its checks, and the
-//! particles each action takes (its region, tested once on the object's particles at rest).
+//! object (`sim::actions`, docs/method.md §2.6): the checks of the scene file's form
+//! (`scene::physics::ActionSpec`) and the particles each action takes (its region, tested
+//! once on the object's particles at rest).
 
 use glam::{DVec3, Vec3};
-use schemars::JsonSchema;
-use serde::{Deserialize, Serialize};
 
-use super::physics::{finite3, require, SelectSpec};
+use super::physics::{finite3, require, ActionSpec, PathKey, SelectSpec};
 use super::SceneError;
 use crate::sim::actions::{Action, ActionKind, Drive, Path, MAX_ACTIONS};
-
-/// One timed action: exactly one of `impulse`, `hold`, `drive`, on `region` (default: the
-/// whole object) during [`from`, `to`).
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ActionSpec {
-    /// A push: `{"acceleration": [ax, ay, az]}` in m/s², or `{"force": [Fx, Fy, Fz]}` in
-    /// newtons spread over the region's mass. A poke, a kick, a tug.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub impulse: Option<ImpulseSpec>,
-    /// `{}`: the region pinned where it is (v = 0, its shape kept) during the window: a pot
-    /// on a table, a clamped end.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub hold: Option<HoldSpec>,
-    /// The region moved rigidly: `{"velocity": [..]}` in m/s, or `{"path": [{"time": t,
-    /// "position": [..]}, ..]}`, moving it as the keyframed point moves from `from` on (the
-    /// camera paths' C¹ spline, held before the first key and after the last): a hand
-    /// holding a stem, a pulled corner.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub drive: Option<DriveSpec>,
-    /// Which particles, as `physics.select`: `{"box": …}`, `{"sphere": …}` (world
-    /// coordinates, tested on the particles at rest) or `{"label": [..]}` (a capture's
-    /// segments, an asset's regions). Default: the whole object.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub region: Option<SelectSpec>,
-    /// Start of the window in seconds. Default 0.
-    #[serde(default)]
-    pub from: f64,
-    /// End of the window in seconds (> from). Default: the end of the run.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub to: Option<f64>,
-}
-
-/// An impulse's size: exactly one of the two.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct ImpulseSpec {
-    /// m/s² on every particle of the region.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub acceleration: Option<[f64; 3]>,
-    /// Newtons on the region as a whole: each particle takes F / M, M the region's mass.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub force: Option<[f64; 3]>,
-}
-
-/// A hold takes no parameters.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct HoldSpec {}
-
-/// How a driven region moves: exactly one of the two.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct DriveSpec {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub velocity: Option<[f64; 3]>,
-    /// At least one keyframe, times strictly increasing.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub path: Option<Vec<PathKey>>,
-}
-
-/// A keyframe of a drive's path.
-#[derive(Clone, Debug, Serialize, Deserialize, JsonSchema, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct PathKey {
-    /// Seconds.
-    pub time: f32,
-    pub position: [f32; 3],
-}
 
 /// An action checked but not yet sized: a force still waits for its region's mass.
 #[derive(Clone, Debug)]

@@ -10,6 +10,7 @@
 
 pub mod actions;
 mod build;
+pub mod cameras;
 pub mod fill;
 pub mod kinematic;
 pub mod lighting;
@@ -36,7 +37,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::splat::procedural::{ProceduralError, ProceduralSpec};
 
-pub use path::{from_cameras_json, CameraPath};
+pub use path::{from_camera_file, from_cameras_json, CameraPath};
 
 /// The embedded default scene (`scenes/default.json`).
 pub const DEFAULT_SCENE_JSON: &str = include_str!("../../scenes/default.json");
@@ -237,6 +238,28 @@ pub enum PathSpec {
     Keyframes(KeyframesSpec),
     /// The cameras of an INRIA 3DGS `cameras.json`.
     CamerasJson(CamerasJsonSpec),
+    /// The registered images of a COLMAP sparse model (a folder such as `sparse/0`, text or
+    /// binary), in the order of their names.
+    Colmap(CamerasJsonSpec),
+    /// The frames of a `transforms.json` (nerfstudio, instant-ngp), in the file's order.
+    TransformsJson(CamerasJsonSpec),
+    /// A nerfstudio render path (`camera_path.json`), optionally mapped back into the
+    /// capture's frame by the run's `dataparser_transforms.json`.
+    Nerfstudio(CamerasJsonSpec),
+}
+
+impl PathSpec {
+    /// The camera file a path reads, and its format (none for orbits and keyframes).
+    pub fn camera_file(&self) -> Option<(&CamerasJsonSpec, cameras::CameraFormat)> {
+        use cameras::CameraFormat as F;
+        match self {
+            PathSpec::CamerasJson(c) => Some((c, F::Inria)),
+            PathSpec::Colmap(c) => Some((c, F::Colmap)),
+            PathSpec::TransformsJson(c) => Some((c, F::Transforms)),
+            PathSpec::Nerfstudio(c) => Some((c, F::Nerfstudio)),
+            PathSpec::Orbit(_) | PathSpec::Keyframes(_) => None,
+        }
+    }
 }
 
 fn default_turns() -> f32 {
@@ -290,11 +313,17 @@ pub struct Keyframe {
 #[derive(Clone, Debug, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CamerasJsonSpec {
-    /// Path of the `cameras.json`, relative to the scene file.
+    /// Path of the camera file (for `colmap`, the model's folder or one of its files),
+    /// relative to the scene file.
     pub file: PathBuf,
     /// How the file's cameras map to frames. Default `each`.
     #[serde(default)]
     pub mode: CamerasJsonMode,
+    /// `nerfstudio` only: the training run's `dataparser_transforms.json`, relative to the
+    /// scene file, which maps the path from nerfstudio's normalised world back into the
+    /// capture's frame. Default: the path is used as it is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dataparser_transforms: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]

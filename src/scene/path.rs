@@ -1,12 +1,12 @@
 //! Camera paths: orbit, keyframes (Hermite/Catmull-Rom positions, slerp or look-at
-//! orientation) and INRIA 3DGS `cameras.json` files.
+//! orientation) and camera files (`scene::cameras`: INRIA `cameras.json`, COLMAP,
+//! `transforms.json`, nerfstudio camera paths).
 
 use std::path::Path;
 
 use glam::{Mat3, Quat, Vec3};
-use serde::Deserialize;
 
-use super::{mat3_from_rows, rotation_problem, CamerasJsonMode, PathSpec, Scene, SceneError};
+use super::{cameras, mat3_from_rows, CamerasJsonMode, PathSpec, Scene, SceneError};
 use crate::render::camera::{focal_from_fov, look_at_rotation, Camera, DEFAULT_NEAR};
 use crate::spline::{locate, Hermite, Segment};
 
@@ -16,7 +16,7 @@ impl Scene {
     /// `up: "auto"` among them) is no longer where those cameras look. One line per such
     /// object; the scene still renders as written.
     pub fn camera_frame_warnings(&self) -> Vec<String> {
-        let PathSpec::CamerasJson(spec) = &self.camera.path else {
+        let Some((spec, _)) = self.camera.path.camera_file() else {
             return Vec::new();
         };
         self.objects
@@ -313,98 +313,8 @@ fn spline(template: Camera, up: Vec3, keys: &[Key]) -> Spline {
 }
 
 // ---------------------------------------------------------------------------------------------
-// cameras.json
+// Camera files
 // ---------------------------------------------------------------------------------------------
-
-/// One entry of an INRIA 3DGS `cameras.json`.
-#[derive(Clone, Debug, Deserialize)]
-struct CameraEntry {
-    #[serde(default)]
-    #[allow(dead_code)]
-    id: Option<serde_json::Value>,
-    #[serde(default)]
-    #[allow(dead_code)]
-    img_name: Option<String>,
-    width: u32,
-    height: u32,
-    position: [f32; 3],
-    rotation: [[f32; 3]; 3],
-    fx: f32,
-    fy: f32,
-}
-
-/// Read and check a `cameras.json`: non-empty, positive sizes and focal lengths, finite
-/// positions, rotations orthonormal (within 1e-3; re-orthonormalised when off by more than
-/// 1e-5, used as they are otherwise).
-fn read_cameras_json(path: &Path) -> Result<Vec<(CameraEntry, Mat3)>, SceneError> {
-    let origin = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let entries: Vec<CameraEntry> =
-        serde_json::from_str(&text).map_err(|e| SceneError::parse(&origin, &e))?;
-    if entries.is_empty() {
-        return Err(SceneError::invalid(
-            &origin,
-            "[]",
-            "an empty array",
-            "at least one camera",
-        ));
-    }
-    let mut out = Vec::with_capacity(entries.len());
-    for (i, e) in entries.into_iter().enumerate() {
-        let f = |name: &str| format!("[{i}].{name}");
-        for (name, v) in [("width", e.width), ("height", e.height)] {
-            if v == 0 {
-                return Err(SceneError::invalid(
-                    &origin,
-                    f(name),
-                    v,
-                    "a size in pixels ≥ 1",
-                ));
-            }
-        }
-        super::validate::check_positive(&origin, &f("fx"), e.fx)?;
-        super::validate::check_positive(&origin, &f("fy"), e.fy)?;
-        super::validate::check_finite3(&origin, &f("position"), e.position)?;
-        let r = mat3_from_rows(e.rotation);
-        if let Some(problem) = rotation_problem(r, 1e-3) {
-            return Err(SceneError::invalid(
-                &origin,
-                f("rotation"),
-                format!("{:?}", e.rotation),
-                problem,
-            ));
-        }
-        let r = if rotation_problem(r, 1e-5).is_some() {
-            orthonormalise(r)
-        } else {
-            r
-        };
-        out.push((e, r));
-    }
-    Ok(out)
-}
-
-/// Gram-Schmidt on the columns (keeps the z = view axis exactly).
-fn orthonormalise(r: Mat3) -> Mat3 {
-    let z = r.z_axis.normalize();
-    let x = (r.x_axis - z * z.dot(r.x_axis)).normalize();
-    Mat3::from_cols(x, z.cross(x), z)
-}
-
-/// Output size for a file camera of size (w, h): the given ones, the missing one following
-/// the camera's aspect ratio.
-fn output_size(w: u32, h: u32, width: Option<u32>, height: Option<u32>) -> (u32, u32) {
-    let aspect = w as f64 / h as f64;
-    match (width, height) {
-        (Some(a), Some(b)) => (a, b),
-        (Some(a), None) => (a, ((a as f64 / aspect).round() as u32).max(1)),
-        (None, Some(b)) => (((b as f64 * aspect).round() as u32).max(1), b),
-        (None, None) => (w, h),
-    }
-}
 
 /// The cameras of an INRIA 3DGS `cameras.json` (array of {id, img_name, width, height,
 /// position, rotation (camera-to-world rows), fx, fy}), at the given output size (`None`: the
@@ -416,34 +326,20 @@ pub fn from_cameras_json(
     width: Option<u32>,
     height: Option<u32>,
 ) -> Result<Vec<Camera>, SceneError> {
-    let origin = path.display().to_string();
-    for (name, v) in [("width", width), ("height", height)] {
-        if let Some(v) = v {
-            if !(1..=super::MAX_IMAGE_SIZE).contains(&v) {
-                return Err(SceneError::invalid(
-                    &origin,
-                    format!("requested {name}"),
-                    v,
-                    format!("1..={}", super::MAX_IMAGE_SIZE),
-                ));
-            }
-        }
-    }
-    Ok(read_cameras_json(path)?
-        .into_iter()
-        .map(|(e, rotation)| {
-            let (w, h) = output_size(e.width, e.height, width, height);
-            Camera {
-                position: Vec3::from_array(e.position),
-                rotation,
-                fx: e.fx * w as f32 / e.width as f32,
-                fy: e.fy * h as f32 / e.height as f32,
-                width: w,
-                height: h,
-                near: DEFAULT_NEAR,
-            }
-        })
-        .collect())
+    let file = cameras::read(path, cameras::CameraFormat::Inria, None)?;
+    cameras::at_size(&path.display().to_string(), &file.cameras, width, height)
+}
+
+/// As [`from_cameras_json`] for a camera file of any format we read (`scene::cameras`,
+/// told by its content), with what the reader warned of.
+pub fn from_camera_file(
+    path: &Path,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<(Vec<Camera>, Vec<String>), SceneError> {
+    let file = cameras::read_any(path)?;
+    let cams = cameras::at_size(&path.display().to_string(), &file.cameras, width, height)?;
+    Ok((cams, file.warnings))
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -516,9 +412,22 @@ pub(super) fn build(scene: &Scene) -> Result<CameraPath, SceneError> {
                 &keys,
             ))
         }
-        PathSpec::CamerasJson(c) => {
+        PathSpec::CamerasJson(c)
+        | PathSpec::Colmap(c)
+        | PathSpec::TransformsJson(c)
+        | PathSpec::Nerfstudio(c) => {
+            let (_, format) = cam.path.camera_file().expect("a camera file");
             let file = scene.base_dir.join(&c.file);
-            let cams = from_cameras_json(&file, Some(width), Some(height))?;
+            let dataparser = c
+                .dataparser_transforms
+                .as_ref()
+                .map(|d| scene.base_dir.join(d));
+            let read = cameras::read(&file, format, dataparser.as_deref())?;
+            for w in &read.warnings {
+                log::warn!("{w}");
+            }
+            let origin = file.display().to_string();
+            let cams = cameras::at_size(&origin, &read.cameras, Some(width), Some(height))?;
             let with_scene_focal = |c: Camera| match scene_focal {
                 Some((fx, fy)) => Camera {
                     fx,

@@ -125,7 +125,7 @@ impl Scene {
     fn validate_camera(&self) -> Result<(), SceneError> {
         let o = self.origin.as_str();
         let cam = &self.camera;
-        let is_cameras_json = matches!(cam.path, PathSpec::CamerasJson(_));
+        let is_cameras_json = cam.path.camera_file().is_some();
         match (cam.fov_y_deg, cam.fx, cam.fy) {
             (Some(fov), None, None) => {
                 if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
@@ -201,17 +201,22 @@ impl Scene {
                 }
             }
             PathSpec::Keyframes(k) => self.validate_keyframes(&k.keyframes)?,
-            PathSpec::CamerasJson(c) => {
+            PathSpec::CamerasJson(c)
+            | PathSpec::Colmap(c)
+            | PathSpec::TransformsJson(c)
+            | PathSpec::Nerfstudio(c) => {
+                let (_, format) = cam.path.camera_file().expect("a camera file");
                 if c.file.as_os_str().is_empty() {
                     return Err(SceneError::invalid(
                         o,
                         "camera.path.file",
                         "\"\"",
-                        "a path to a cameras.json",
+                        format!("a path to a {}", format.name()),
                     ));
                 }
                 let full = self.base_dir.join(&c.file);
-                if !full.is_file() {
+                let folder = format == super::cameras::CameraFormat::Colmap && full.is_dir();
+                if !(full.is_file() || folder) {
                     return Err(SceneError::invalid(
                         o,
                         "camera.path.file",
