@@ -118,7 +118,8 @@ fn median(v: &mut [f64]) -> f64 {
 }
 
 /// Milliseconds per frame for 100k and 1M Gaussians (degree 3) at 1920×1080 and 100k at
-/// 640×360: render passes (submit to GPU idle), readback, and PNG encoding, separately.
+/// 640×360: render passes (submit to GPU idle), readback, and PNG encoding, separately;
+/// the same with the alpha and depth passes, and lit.
 /// With `per_pass`, one more frame per case is rendered pass by pass and broken down.
 pub fn render_bench(
     gpu: &GpuContext,
@@ -180,6 +181,17 @@ pub fn render_bench(
                 list.join(", ")
             )?;
         }
+        renderer.set_passes(gpu, true);
+        let with_passes = time_render(gpu, &mut renderer, &camera, repeat)?;
+        renderer.set_passes(gpu, false);
+        writeln!(
+            out,
+            "{:>22} with the alpha and depth passes: render ms {:.2} ({:+.0}%), readback ms {:.2}",
+            "",
+            with_passes.render_ms,
+            100.0 * (with_passes.render_ms / t.render_ms - 1.0),
+            with_passes.readback_ms
+        )?;
         let lit = lit_frame(gpu, n, &camera, repeat)?;
         writeln!(
             out,

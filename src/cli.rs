@@ -169,6 +169,23 @@ impl P2gArg {
     }
 }
 
+/// `--passes`: a pass by name.
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum PassArg {
+    Alpha,
+    Depth,
+}
+
+impl PassArg {
+    pub(crate) fn pass(self) -> splatter::output::passes::Pass {
+        use splatter::output::passes::Pass;
+        match self {
+            PassArg::Alpha => Pass::Alpha,
+            PassArg::Depth => Pass::Depth,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 pub(crate) struct RenderArgs {
     /// Scene file (JSON). See docs/scene-format.md.
@@ -225,6 +242,12 @@ pub(crate) struct RenderArgs {
     /// path), to match a plate in Blender or nerfstudio (docs/scene-format.md).
     #[arg(long, value_name = "DIR")]
     pub(crate) export_cameras: Option<PathBuf>,
+    /// Also write passes beside each frame, from the same compositing: `alpha`
+    /// (OUT/alpha/frame_00000.png, RGBA with straight colour) and `depth`
+    /// (OUT/depth/frame_00000.exr, one float channel Z: the alpha-weighted mean camera-space
+    /// depth, +inf where nothing was drawn). A comma-separated list (docs/scene-format.md).
+    #[arg(long, value_delimiter = ',', value_name = "PASS")]
+    pub(crate) passes: Vec<PassArg>,
     /// Quick look at a capture (any splat format) without a scene file: stood upright
     /// and orbited, framing its robust bounds.
     #[arg(long, conflicts_with = "scene")]
@@ -320,6 +343,7 @@ impl RenderArgs {
             export_glb: self.export_glb,
             export_particles: self.export_particles,
             export_cameras: self.export_cameras,
+            passes: self.passes.iter().map(|p| p.pass()).collect(),
             resume: self.resume,
             deterministic: self.deterministic,
             p2g: self.p2g.map(P2gArg::path),

@@ -713,6 +713,103 @@ fn cameras_json_path_with_a_transformed_capture_warns() {
     assert!(warnings(&out).is_empty(), "{}", describe(&out));
 }
 
+/// `--passes alpha,depth` writes OUT/alpha/frame_00000.png (RGBA: the frame is its
+/// straight colour over the background, within 1/255) and OUT/depth/frame_00000.exr (one
+/// float channel `Z`, read back by the exr crate: the camera distance's range where the
+/// sphere is, +∞ around it); a bad pass name is one error line; resuming the finished run
+/// finds the passes written.
+#[test]
+fn passes_are_written_beside_the_frames() {
+    let dir = workdir();
+    write(dir.path(), "tiny.json", &tiny_scene());
+    let out = splatter(
+        dir.path(),
+        &[
+            "render",
+            "tiny.json",
+            "--out",
+            "o",
+            "--passes",
+            "alpha,depth",
+        ],
+    );
+    expect_success(&out);
+    let frame = image::open(dir.path().join("o/frame_00000.png"))
+        .unwrap()
+        .to_rgb8();
+    let alpha = image::open(dir.path().join("o/alpha/frame_00000.png")).unwrap();
+    assert_eq!(alpha.color(), image::ColorType::Rgba8);
+    let alpha = alpha.to_rgba8();
+    let (mut worst, mut covered) = (0.0f32, 0);
+    for (f, a) in frame.pixels().zip(alpha.pixels()) {
+        let al = f32::from(a[3]) / 255.0;
+        covered += usize::from(a[3] > 0);
+        // the default background is black
+        for c in 0..3 {
+            let over = f32::from(a[c]) / 255.0 * al;
+            worst = worst.max((over - f32::from(f[c]) / 255.0).abs() * 255.0);
+        }
+    }
+    assert!(worst <= 1.0, "composited alpha pass off by {worst}/255");
+    assert!(
+        covered > 100 && covered < 64 * 48,
+        "{covered} pixels covered"
+    );
+    let exr =
+        exr::prelude::read_first_flat_layer_from_file(dir.path().join("o/depth/frame_00000.exr"))
+            .expect("the depth pass is an OpenEXR file");
+    let layer = &exr.layer_data;
+    assert_eq!((layer.size.0, layer.size.1), (64, 48));
+    let z = layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == "Z")
+        .expect("a Z channel");
+    let values: Vec<f32> = z.sample_data.values_as_f32().collect();
+    let (mut lo, mut hi, mut infinite) = (f32::INFINITY, 0.0f32, 0);
+    for (v, a) in values.iter().zip(alpha.pixels()) {
+        if a[3] == 0 && !v.is_finite() {
+            infinite += 1;
+        } else if v.is_finite() {
+            lo = lo.min(*v);
+            hi = hi.max(*v);
+        }
+    }
+    // The orbit camera is √(3² + 1²) = 3.16 from the centre of the sphere of radius 0.5.
+    eprintln!("depth {lo:.3} .. {hi:.3}, {infinite} pixels at +inf");
+    assert!(lo > 2.5 && hi < 3.8 && lo < hi, "depth {lo} .. {hi}");
+    assert!(infinite > 100);
+    let again = splatter(
+        dir.path(),
+        &[
+            "render",
+            "tiny.json",
+            "--out",
+            "o",
+            "--passes",
+            "alpha,depth",
+            "--resume",
+        ],
+    );
+    expect_success(&again);
+    assert!(
+        String::from_utf8_lossy(&again.stderr).contains("all written already"),
+        "{}",
+        describe(&again)
+    );
+    let bad = splatter(
+        dir.path(),
+        &["render", "tiny.json", "--passes", "alpha,normals"],
+    );
+    assert!(!bad.status.success());
+    assert!(
+        String::from_utf8_lossy(&bad.stderr).contains("normals"),
+        "{}",
+        describe(&bad)
+    );
+}
+
 #[test]
 fn schema_is_json_with_properties() {
     let dir = workdir();

@@ -134,6 +134,142 @@ fn isotropic_gaussian_has_the_analytic_profile() {
     }
 }
 
+/// The passes of that Gaussian (docs/method.md §7.7), on the GPU and the CPU reference:
+/// the alpha pass's α is the analytic profile (within 1.5/255, as the colour), its straight
+/// colour the Gaussian's own (white, up to the frame's rounding over α), and the depth pass the centre's
+/// camera-space depth z there (within 2e-5 relative: f32 sums) and +∞ where nothing was drawn. The
+/// colour frame is the same bytes with the passes on as off.
+#[test]
+fn the_passes_of_a_single_gaussian_are_analytic() {
+    let (sigma, z, opacity) = (0.05f32, 2.0f32, 0.8f32);
+    let splats = Splats {
+        means: vec![Vec3::ZERO],
+        covariances: vec![sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(
+            sigma * sigma,
+        )))],
+        rotations: vec![Quat::IDENTITY],
+        opacities: vec![opacity],
+        sh_degree: 0,
+        sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
+        ..Default::default()
+    };
+    let cam = facing_camera(z, 64);
+    let bg = Vec3::new(0.2, 0.3, 0.4);
+    let s2 = (cam.fx * sigma / z).powi(2) + 0.3;
+    let check = |passes: &splatter::render::PassImages, what: &str| {
+        let (mut worst_alpha, mut worst_depth, mut drawn) = (0.0f32, 0.0f32, 0);
+        for y in 0..64u32 {
+            for x in 0..64u32 {
+                let (dx, dy) = (x as f32 + 0.5 - 32.0, y as f32 + 0.5 - 32.0);
+                let mut a = opacity * (-(dx * dx + dy * dy) / (2.0 * s2)).exp();
+                if a < 1.0 / 255.0 {
+                    a = 0.0;
+                }
+                let i = (y * 64 + x) as usize;
+                let px = &passes.alpha[4 * i..4 * i + 4];
+                worst_alpha = worst_alpha.max((f32::from(px[3]) / 255.0 - a).abs());
+                let depth = passes.depth[i];
+                if a > 0.0 {
+                    drawn += 1;
+                    // The straight colour reproduces the frame at the 8-bit α: white up
+                    // to the frame's rounding divided by α.
+                    let a8 = f32::from(px[3]) / 255.0;
+                    let levels = (1.0 / a8.max(1.0 / 255.0)).ceil() as u8;
+                    for c in &px[..3] {
+                        assert!(
+                            *c >= 255 - levels,
+                            "{what}: straight colour {px:?} at ({x}, {y})"
+                        );
+                    }
+                    worst_depth = worst_depth.max((depth / z - 1.0).abs());
+                } else if px[3] == 0 {
+                    assert_eq!(
+                        depth,
+                        f32::INFINITY,
+                        "{what}: depth where nothing was drawn"
+                    );
+                }
+            }
+        }
+        eprintln!("{what}: {drawn} pixels drawn, α within {worst_alpha:.4}, depth within {worst_depth:.1e}");
+        assert!(drawn > 100, "{what}");
+        assert!(worst_alpha <= 1.5 / 255.0, "{what}: α off by {worst_alpha}");
+        assert!(worst_depth <= 2e-5, "{what}: depth off by {worst_depth}");
+    };
+    let (cpu_rgba, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, true);
+    assert_eq!(cpu_rgba, cpu::render(&splats, &cam, bg));
+    check(&cpu_passes.unwrap(), "CPU reference");
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.upload(&gpu, &splats).unwrap();
+        let plain = renderer.render(&gpu, &cam, bg).unwrap();
+        assert!(plain.passes.is_none());
+        renderer.set_passes(&gpu, true);
+        let image = renderer.render(&gpu, &cam, bg).unwrap();
+        assert_eq!(
+            image.rgba, plain.rgba,
+            "the frame changed with the passes on"
+        );
+        check(image.passes.as_ref().unwrap(), &gpu.describe());
+    }
+}
+
+/// The alpha pass composited over the background gives the colour frame: on a random
+/// scene of 3000 Gaussians whose colours lie in [0, 1], every channel within 1/255, on the
+/// GPU and the CPU reference; and the GPU's depth pass agrees with the reference's.
+#[test]
+fn the_alpha_pass_composited_over_the_background_is_the_frame() {
+    let splats = f16_rounded(random_splats(3000, 0, 7));
+    let cam = camera(160, 120);
+    let bg = Vec3::new(0.1, 0.6, 0.3);
+    let composite_error = |rgba: &[u8], alpha: &[u8]| {
+        let mut worst = 0.0f32;
+        for (f, a) in rgba.chunks_exact(4).zip(alpha.chunks_exact(4)) {
+            let alpha = f32::from(a[3]) / 255.0;
+            for c in 0..3 {
+                let straight = f32::from(a[c]) / 255.0;
+                let over = straight * alpha + bg[c] * (1.0 - alpha);
+                worst = worst.max((over - f32::from(f[c]) / 255.0).abs());
+            }
+        }
+        worst * 255.0
+    };
+    let (cpu_rgba, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, true);
+    let cpu_passes = cpu_passes.unwrap();
+    let e = composite_error(&cpu_rgba, &cpu_passes.alpha);
+    eprintln!("CPU reference: composited within {e:.2}/255");
+    assert!(e <= 1.0, "CPU: {e}/255");
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.set_passes(&gpu, true);
+        renderer.upload(&gpu, &splats).unwrap();
+        let image = renderer.render(&gpu, &cam, bg).unwrap();
+        let passes = image.passes.unwrap();
+        let e = composite_error(&image.rgba, &passes.alpha);
+        let depth_off = passes
+            .depth
+            .iter()
+            .zip(&cpu_passes.depth)
+            .filter(|(a, b)| a.is_finite() && b.is_finite())
+            .map(|(a, b)| (a / b - 1.0).abs())
+            .fold(0.0f32, f32::max);
+        let agree = passes
+            .depth
+            .iter()
+            .zip(&cpu_passes.depth)
+            .filter(|(a, b)| a.is_finite() == b.is_finite())
+            .count();
+        eprintln!(
+            "{}: composited within {e:.2}/255; depth against the reference within {depth_off:.1e} relative, drawn alike at {agree} of {} pixels",
+            gpu.describe(),
+            passes.depth.len()
+        );
+        assert!(e <= 1.0, "{}: {e}/255", gpu.describe());
+        assert!(agree as f64 >= 0.999 * passes.depth.len() as f64);
+        assert!(depth_off < 1e-4, "{}: depth {depth_off}", gpu.describe());
+    }
+}
+
 /// Degree 1, only the z-basis coefficient of red set: seen along a view direction d the red
 /// channel is 0.5 + C1 · d_z · c (docs/method.md §7), while green, with only a DC term, stays 0.5.
 /// Red / green × 0.5 removes the Gaussian's α from the comparison.

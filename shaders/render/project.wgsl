@@ -124,5 +124,6 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
 
     let dir = normalize(mean - cam);
     let color = sh_color(local, frame.sh_degree, rotate_by_conjugate(gin.rotation, dir));
-    projected[local] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, 0.0), vec4<f32>(color, 0.0));
+    // conic.w: the camera-space depth, for the depth pass (rasterize.wgsl, PASSES).
+    projected[local] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, tz), vec4<f32>(color, 0.0));
 }

@@ -9,11 +9,15 @@
 // is sampled at (i + 0.5, j + 0.5). Mirrors `render::cpu::render`.
 // QUADS (and so the workgroup size, THREADS) is set per adapter by `passes::Rasterize`, and
 // so is `read_splat`, how the invocations of a block read a Gaussian from the batch.
+// With PASSES (also set there) the same compositing also yields the alpha and depth passes
+// (docs/method.md §7.7): the image's second plane holds the straight (not premultiplied)
+// colour and α = 1 − T, its third the depth Σ w_i z_i / α (+∞ where nothing was drawn).
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> tile_values: array<u32>;
-// RGBA8, one u32 per pixel, row-major
+// RGBA8, one u32 per pixel, row-major; with PASSES two more planes of as many words
+// (read back as render::gpu::PassImages): straight RGBA8, then the depth's f32 bits.
 @group(0) @binding(4) var<storage, read_write> image: array<u32>;
 // projected_0 … from binding 8, and projected_at(g), follow (`gpu::pages`).
 
@@ -51,6 +55,8 @@ struct Quad {
     r: vec4<f32>,
     g: vec4<f32>,
     b: vec4<f32>,
+    // Σ w_i z_i, the depth pass's sum (PASSES only)
+    d: vec4<f32>,
     live: vec4<bool>,
 }
 
@@ -61,7 +67,7 @@ fn count_true(v: vec4<bool>) -> u32 {
 // One Gaussian blended behind the quad's pixels. Along the invocation's column the
 // exponent −½ Δᵀ Σ'⁻¹ Δ is a quadratic in Δy, p.x + Δy (p.y + p.z Δy), whose coefficients
 // (`column_power`) are computed once per Gaussian for all of the column's pixels.
-fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>) -> Quad {
+fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>, depth: f32) -> Quad {
     var q = quad;
     let dy = vec4<f32>(xo.y) - q.centre_y;
     let power = p.x + dy * (p.y + p.z * dy);
@@ -74,6 +80,9 @@ fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>) -> Quad {
     q.r += color.r * w;
     q.g += color.g * w;
     q.b += color.b * w;
+    if PASSES {
+        q.d += depth * w;
+    }
     q.t = select(q.t, next_t, take);
     q.live &= !saturated;
     return q;
@@ -113,6 +122,33 @@ fn mark_blocks(lid: u32, count: u32, tile_origin: vec2<u32>) {
     }
 }
 
+// +∞: the depth where nothing was drawn.
+const NO_DEPTH: u32 = 0x7f800000u;
+
+// 8-bit rounding, as the frame's bytes (render::cpu::to_u8).
+fn to_levels(v: vec3<f32>) -> vec3<f32> {
+    return floor(clamp(v, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;
+}
+
+// The alpha and depth planes of `pixel` from its frame colour `rgb`, α = 1 − T and the
+// depth sum Σ w_i z_i. The straight colour is the one that, over the background at the
+// 8-bit α, gives back the frame's 8-bit colour (the premultiplied sum / α up to rounding;
+// the frame's own colour where α = 1), and the depth is the depth sum / α.
+fn write_passes(pixel: u32, rgb: vec3<f32>, alpha: f32, depth_sum: f32) {
+    let plane = frame.width * frame.height;
+    let a8 = floor(clamp(alpha, 0.0, 1.0) * 255.0 + 0.5) / 255.0;
+    var straight = vec3<f32>(0.0);
+    if a8 > 0.0 {
+        straight = (to_levels(rgb) - (1.0 - a8) * frame.background.rgb) / a8;
+    }
+    var depth = NO_DEPTH;
+    if alpha > 0.0 {
+        depth = bitcast<u32>(depth_sum / alpha);
+    }
+    image[plane + pixel] = pack4x8unorm(vec4<f32>(clamp(straight, vec3<f32>(0.0), vec3<f32>(1.0)), a8));
+    image[2u * plane + pixel] = depth;
+}
+
 // Pixels of the invocation still compositing.
 fn live_pixels(quads: array<Quad, QUADS>) -> u32 {
     var n = 0u;
@@ -141,7 +177,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     for (var q = 0u; q < QUADS; q++) {
         let y = y0 + 4u * q + vec4<u32>(0u, 1u, 2u, 3u);
         let live = (y < vec4<u32>(frame.height)) & vec4<bool>(x < frame.width);
-        quads[q] = Quad(vec4<f32>(y) + 0.5, vec4<f32>(1.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), live);
+        quads[q] = Quad(vec4<f32>(y) + 0.5, vec4<f32>(1.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), live);
         outside += 4u - count_true(live);
     }
     if outside > 0u {
@@ -185,7 +221,7 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 let color = splat.color.rgb;
                 live = false;
                 for (var q = 0u; q < QUADS; q++) {
-                    quads[q] = blend(quads[q], xo, p, color);
+                    quads[q] = blend(quads[q], xo, p, color, splat.conic.w);
                     live = live || any(quads[q].live);
                 }
             }
@@ -202,7 +238,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
             let y = y0 + 4u * q + j;
             if y < frame.height && x < frame.width {
                 let rgb = vec3<f32>(quad.r[j], quad.g[j], quad.b[j]) + quad.t[j] * frame.background.rgb;
-                image[y * frame.width + x] = pack4x8unorm(vec4<f32>(clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
+                let pixel = y * frame.width + x;
+                image[pixel] = pack4x8unorm(vec4<f32>(clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
+                if PASSES {
+                    write_passes(pixel, rgb, 1.0 - quad.t[j], quad.d[j]);
+                }
             }
         }
     }

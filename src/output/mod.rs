@@ -5,6 +5,7 @@
 pub mod export;
 pub mod manifest;
 pub mod particles;
+pub mod passes;
 mod progress;
 pub mod text;
 pub mod video;
@@ -32,6 +33,11 @@ pub enum OutputError {
     Encode {
         path: PathBuf,
         source: image::ImageError,
+    },
+    #[error("cannot encode {path}: {source}")]
+    EncodeExr {
+        path: PathBuf,
+        source: exr::error::Error,
     },
     #[error("the frame writer thread stopped unexpectedly")]
     WriterGone,
@@ -80,7 +86,39 @@ struct Job {
     path: PathBuf,
     width: u32,
     height: u32,
-    rgba: Vec<u8>,
+    pixels: Pixels,
+}
+
+/// What a job writes.
+pub enum Pixels {
+    /// A colour frame: RGBA8 in, an RGB PNG out.
+    Frame(Vec<u8>),
+    /// The alpha pass: an RGBA PNG.
+    Rgba(Vec<u8>),
+    /// The depth pass: an OpenEXR of one float channel.
+    Depth(Vec<f32>),
+}
+
+/// Encode and write a job, atomically.
+fn write_job(job: &Job) -> Result<(), OutputError> {
+    let (w, h, path) = (job.width, job.height, &job.path);
+    let encoded = match &job.pixels {
+        Pixels::Frame(rgba) => return write_png(path, w, h, rgba),
+        Pixels::Rgba(rgba) => passes::encode_rgba_png(w, h, rgba),
+        Pixels::Depth(depth) => {
+            let bytes =
+                passes::encode_depth_exr(w, h, depth).map_err(|source| OutputError::EncodeExr {
+                    path: path.clone(),
+                    source,
+                })?;
+            return write_atomically(path, &bytes);
+        }
+    };
+    let bytes = encoded.map_err(|source| OutputError::Encode {
+        path: path.clone(),
+        source,
+    })?;
+    write_atomically(path, &bytes)
 }
 
 /// Encodes and writes frames on worker threads while the GPU renders the next ones. PNG
@@ -113,7 +151,7 @@ impl FrameWriter {
                         let job = rx.lock().unwrap_or_else(|p| p.into_inner()).recv();
                         let Ok(job) = job else { return Ok(busy) };
                         let start = Instant::now();
-                        let written = write_png(&job.path, job.width, job.height, &job.rgba);
+                        let written = write_job(&job);
                         busy += start.elapsed();
                         let (state, cv) = &*done;
                         {
@@ -150,6 +188,17 @@ impl FrameWriter {
         height: u32,
         rgba: Vec<u8>,
     ) -> Result<(), OutputError> {
+        self.submit_pixels(path, width, height, Pixels::Frame(rgba))
+    }
+
+    /// Queue an image of any kind (a frame or a pass). Fails if a write failed.
+    pub fn submit_pixels(
+        &mut self,
+        path: PathBuf,
+        width: u32,
+        height: u32,
+        pixels: Pixels,
+    ) -> Result<(), OutputError> {
         if self.workers.iter().any(|w| w.is_finished()) {
             // A worker only stops early on an error: report it now rather than at the end.
             return Err(self.join().err().unwrap_or(OutputError::WriterGone));
@@ -160,7 +209,7 @@ impl FrameWriter {
                 path,
                 width,
                 height,
-                rgba,
+                pixels,
             })
             .is_err()
         {

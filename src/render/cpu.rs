@@ -7,6 +7,7 @@ use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::gpu::layout::{FOV_CLAMP, TILE};
+use super::gpu::PassImages;
 use super::splats::mat3_from_sym3;
 use super::{Camera, Splats};
 use crate::splat::sh;
@@ -143,6 +144,93 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
 
 /// Render to RGBA8 (alpha 255), row-major.
 pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
+    render_with_passes(splats, camera, background, false).0
+}
+
+/// [`render`], and with `passes` the alpha and depth passes of the same compositing (as the
+/// GPU rasteriser's, `shaders/render/rasterize.wgsl`).
+pub fn render_with_passes(
+    splats: &Splats,
+    camera: &Camera,
+    background: Vec3,
+    passes: bool,
+) -> (Vec<u8>, Option<PassImages>) {
+    let list = sorted_projections(splats, camera);
+    let (w, h) = (camera.width, camera.height);
+    let pixels: Vec<Composite> = (0..w * h)
+        .into_par_iter()
+        .map(|i| composite_pixel(&list, i % w, i / w))
+        .collect();
+    let rgba = pixels
+        .iter()
+        .flat_map(|p| {
+            let c = (p.sum + p.t * background).clamp(Vec3::ZERO, Vec3::ONE);
+            [to_u8(c.x), to_u8(c.y), to_u8(c.z), 255]
+        })
+        .collect();
+    let passes = passes.then(|| PassImages {
+        alpha: pixels
+            .iter()
+            .flat_map(|p| {
+                let (c, a) = p.straight_over(background);
+                [to_u8(c.x), to_u8(c.y), to_u8(c.z), a]
+            })
+            .collect(),
+        depth: pixels.iter().map(Composite::depth).collect(),
+    });
+    (rgba, passes)
+}
+
+/// What front-to-back compositing leaves at a pixel: the premultiplied colour sum Σ w_i c_i,
+/// the transmittance T and the depth sum Σ w_i z_i (w_i = α_i T_i).
+#[derive(Clone, Copy, Debug)]
+pub struct Composite {
+    pub sum: Vec3,
+    pub t: f32,
+    pub depth_sum: f32,
+}
+
+impl Composite {
+    /// α = 1 − T.
+    pub fn alpha(&self) -> f32 {
+        1.0 - self.t
+    }
+
+    /// The straight (not premultiplied) colour and the 8-bit α of the alpha pass: the
+    /// colour that over `background` at that α gives back the frame's 8-bit colour, so that
+    /// compositing the pass reproduces the frame within 1/255 (it is Σ w_i c_i / α up to
+    /// that rounding, and the frame's own colour where α = 1; black where α rounds to 0).
+    pub fn straight_over(&self, background: Vec3) -> (Vec3, u8) {
+        let a = to_u8(self.alpha());
+        let a8 = f32::from(a) / 255.0;
+        if a == 0 {
+            return (Vec3::ZERO, 0);
+        }
+        let frame = (self.sum + self.t * background).clamp(Vec3::ZERO, Vec3::ONE);
+        let levels = Vec3::new(
+            f32::from(to_u8(frame.x)),
+            f32::from(to_u8(frame.y)),
+            f32::from(to_u8(frame.z)),
+        ) / 255.0;
+        (
+            ((levels - (1.0 - a8) * background) / a8).clamp(Vec3::ZERO, Vec3::ONE),
+            a,
+        )
+    }
+
+    /// The alpha-weighted mean depth Σ w_i z_i / α, +∞ where α = 0.
+    pub fn depth(&self) -> f32 {
+        let a = self.alpha();
+        if a > 0.0 {
+            self.depth_sum / a
+        } else {
+            f32::INFINITY
+        }
+    }
+}
+
+/// The Gaussians `camera` sees, front to back.
+fn sorted_projections(splats: &Splats, camera: &Camera) -> Vec<ProjectedGaussian> {
     let mut list: Vec<ProjectedGaussian> = (0..splats.len())
         .into_par_iter()
         .filter_map(|i| project_gaussian(splats, i, camera))
@@ -154,27 +242,22 @@ pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
             .cmp(&b.depth.to_bits())
             .then(a.index.cmp(&b.index))
     });
-    let (w, h) = (camera.width, camera.height);
-    let mut out = vec![0u8; (w * h * 4) as usize];
-    out.par_chunks_mut((w * 4) as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            let y = y as u32;
-            for x in 0..w {
-                let c = shade_pixel(&list, x, y, background);
-                let px = &mut row[(x * 4) as usize..(x * 4 + 4) as usize];
-                px.copy_from_slice(&[to_u8(c.x), to_u8(c.y), to_u8(c.z), 255]);
-            }
-        });
-    out
+    list
 }
 
-/// Front-to-back compositing of one pixel (docs/method.md §7).
+/// Front-to-back compositing of one pixel (docs/method.md §7) over `background`.
 pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3) -> Vec3 {
+    let p = composite_pixel(list, x, y);
+    (p.sum + p.t * background).clamp(Vec3::ZERO, Vec3::ONE)
+}
+
+/// Front-to-back compositing of one pixel (docs/method.md §7): its sums and transmittance.
+pub fn composite_pixel(list: &[ProjectedGaussian], x: u32, y: u32) -> Composite {
     let (tx, ty) = (x / TILE, y / TILE);
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
     let mut t = 1.0f32;
     let mut rgb = Vec3::ZERO;
+    let mut depth_sum = 0.0f32;
     for g in list {
         if tx < g.tile_min.0 || tx >= g.tile_max.0 || ty < g.tile_min.1 || ty >= g.tile_max.1 {
             continue;
@@ -197,9 +280,14 @@ pub fn shade_pixel(list: &[ProjectedGaussian], x: u32, y: u32, background: Vec3)
             break;
         }
         rgb += g.color * (alpha * t);
+        depth_sum += g.depth * (alpha * t);
         t = next_t;
     }
-    (rgb + t * background).clamp(Vec3::ZERO, Vec3::ONE)
+    Composite {
+        sum: rgb,
+        t,
+        depth_sum,
+    }
 }
 
 /// The rounding of WGSL's `pack4x8unorm`: round(clamp(c, 0, 1) × 255).

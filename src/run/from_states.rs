@@ -26,6 +26,9 @@ pub(super) fn execute(
     let hash = checkpoint::scene_hash(scene, &Splats::default(), None);
     let dir = scene.output_dir();
     create_dir(&dir, "output directory")?;
+    for pass in &job.opts.passes {
+        create_dir(&pass.dir(&dir), "pass directory")?;
+    }
     on_event(Event::Note(format!("adapter: {}", gpu.describe())));
     let manifest_file = manifest_path(&dir, &job.frames, scene.frame_count());
     let (width, height) = (scene.output.width, scene.output.height);
@@ -55,8 +58,12 @@ pub(super) fn execute(
         job: &job,
         gpu,
         states,
-        renderer: GpuRenderer::new(gpu),
-        sink: Sink::new(dir, manifest),
+        renderer: {
+            let mut r = GpuRenderer::new(gpu);
+            r.set_passes(gpu, !job.opts.passes.is_empty());
+            r
+        },
+        sink: Sink::new(dir, &job.opts.passes, manifest),
     };
     on_event(Event::Frames(job.frames.clone()));
     let result = frames.run(on_event);

@@ -30,6 +30,8 @@ use crate::farm::Chunk;
 use crate::frames::FrameSet;
 use crate::gpu::GpuContext;
 use crate::output::manifest::{ChunkSettings, FrameTiming, Manifest, ManifestWriter, Settings};
+use crate::output::passes::Pass;
+use crate::output::Pixels;
 use crate::output::{frame_path, FrameWriter};
 use crate::render::gpu::{FrameTimings, RenderedImage};
 use crate::render::Splats;
@@ -81,6 +83,8 @@ pub struct RunOptions {
     pub export_glb: Option<PathBuf>,
     /// Also write each frame's MPM particles as a PLY point cloud into this directory.
     pub export_particles: Option<PathBuf>,
+    /// Passes written beside the colour frames (`OUT/alpha/`, `OUT/depth/`).
+    pub passes: Vec<crate::output::passes::Pass>,
     /// Also write the rendered frames' cameras into this directory, as an INRIA
     /// `cameras.json` and a nerfstudio `camera_path.json` (`scene::cameras::export`).
     pub export_cameras: Option<PathBuf>,
@@ -128,6 +132,7 @@ impl Default for RunOptions {
             export_glb: None,
             export_particles: None,
             export_cameras: None,
+            passes: Vec::new(),
             resume: false,
             deterministic: false,
             p2g: None,
@@ -411,7 +416,7 @@ impl Job {
     }
 
     /// A frame counts as done for `--resume` when its PNG (and each export's file: PLY,
-    /// SPZ, GLB, particles) exists: both are written to a temporary name and renamed, so existing means
+    /// SPZ, GLB, particles, passes) exists: both are written to a temporary name and renamed, so existing means
     /// complete.
     fn frame_done(&self, dir: &Path, frame: u32) -> bool {
         frame_path(dir, frame).is_file()
@@ -424,6 +429,11 @@ impl Job {
                 .export_particles
                 .as_deref()
                 .is_none_or(|d| crate::output::particles::frame_particles_path(d, frame).is_file())
+            && self
+                .opts
+                .passes
+                .iter()
+                .all(|p| p.frame_file(dir, frame).is_file())
     }
 
     /// The manifest of this run; with `--resume`, the frame timings of an earlier run of
@@ -457,6 +467,7 @@ impl Job {
     ) -> Result<Summary> {
         let Sink {
             dir,
+            passes: _,
             writer,
             mut manifest,
             rendered,
@@ -500,6 +511,8 @@ impl Job {
 /// and the counts the summary reports.
 struct Sink {
     dir: PathBuf,
+    /// The passes written beside each frame.
+    passes: Vec<Pass>,
     writer: FrameWriter,
     manifest: ManifestWriter,
     rendered: u32,
@@ -509,10 +522,11 @@ struct Sink {
 }
 
 impl Sink {
-    fn new(dir: PathBuf, manifest: ManifestWriter) -> Sink {
+    fn new(dir: PathBuf, passes: &[Pass], manifest: ManifestWriter) -> Sink {
         let workers = FrameWriter::default_workers();
         Sink {
             dir,
+            passes: passes.to_vec(),
             writer: FrameWriter::new(workers, 2 * workers),
             manifest,
             rendered: 0,
@@ -534,8 +548,24 @@ impl Sink {
         self.gpu_ms += gpu_ms;
         timing.gpu_ms = gpu_ms;
         let path = frame_path(&self.dir, frame);
-        self.writer
-            .submit(path, image.width, image.height, image.rgba)?;
+        let RenderedImage {
+            width: w,
+            height: h,
+            rgba,
+            passes,
+            ..
+        } = image;
+        self.writer.submit(path, w, h, rgba)?;
+        if let Some(p) = passes {
+            for pass in &self.passes {
+                let file = pass.frame_file(&self.dir, frame);
+                let pixels = match pass {
+                    Pass::Alpha => Pixels::Rgba(p.alpha.clone()),
+                    Pass::Depth => Pixels::Depth(p.depth.clone()),
+                };
+                self.writer.submit_pixels(file, w, h, pixels)?;
+            }
+        }
         self.manifest.frame_done(frame, timing)?;
         self.rendered += 1;
         Ok(())

@@ -53,6 +53,7 @@ pub(super) fn execute(
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
     note_scene(&job, splats.len(), &dir, on_event);
     let mut renderer = GpuRenderer::new(gpu);
+    renderer.set_passes(gpu, !opts.passes.is_empty());
     renderer.upload(gpu, &splats)?;
     let lighting = prepare_lighting(
         &job,
@@ -98,7 +99,7 @@ pub(super) fn execute(
         rotator: opts.exports().next().map(|_| ShRotator::new()),
         fragment_log,
         checkpoint_file: checkpoint_path(&dir),
-        sink: Sink::new(dir, manifest),
+        sink: Sink::new(dir, &job.opts.passes, manifest),
     };
     on_event(Event::Frames(job.frames.clone()));
     let first_sim = resume_from.as_ref().map_or(0, |cp| cp.frame);

@@ -16,7 +16,9 @@ impl GpuRenderer {
                 return Ok(());
             }
         }
-        let image_bytes = u64::from(width) * u64::from(height) * 4;
+        // The colour, and with the passes the alpha and depth planes (rasterize.wgsl).
+        let planes = if self.passes { 3 } else { 1 };
+        let image_bytes = u64::from(width) * u64::from(height) * 4 * planes;
         if image_bytes > gpu.max_binding() {
             return Err(GpuError::TooLarge {
                 what: format!("a {width}×{height} image"),
@@ -48,8 +50,13 @@ impl GpuRenderer {
             tile_values_alt: storage(device, "tile values alt", cap * 4, none),
             key_count: storage(device, "key count", 4, none),
             ranges: storage(device, "tile ranges", tiles * 8, none),
-            image: storage(device, "image", pixels * 4, wgpu::BufferUsages::COPY_SRC),
-            readback: readback("image readback", pixels * 4),
+            image: storage(
+                device,
+                "image",
+                pixels * 4 * planes,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            readback: readback("image readback", pixels * 4 * planes),
             stats_readback: readback("stats readback", std::mem::size_of::<Stats>() as u64),
         });
         self.bound = None;

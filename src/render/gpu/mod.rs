@@ -137,9 +137,23 @@ pub struct RenderedImage {
     pub width: u32,
     pub height: u32,
     pub rgba: Vec<u8>,
+    /// The alpha and depth passes, when the renderer makes them
+    /// ([`GpuRenderer::set_passes`]).
+    pub passes: Option<PassImages>,
     pub stats: Stats,
     /// Tile pairs dropped because they exceeded the buffer limit (farthest Gaussians).
     pub dropped_intersections: u32,
+}
+
+/// The passes of a frame beside its colour (docs/method.md §7.7), row-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassImages {
+    /// RGBA8: the straight (not premultiplied) colour and α = 1 − T, T the transmittance
+    /// left after every Gaussian of the pixel.
+    pub alpha: Vec<u8>,
+    /// The alpha-weighted mean camera-space depth of the Gaussians' centres, Σ w_i z_i / α
+    /// (w_i = α_i T_i, each Gaussian's share of the pixel), +∞ where α = 0.
+    pub depth: Vec<f32>,
 }
 
 /// Wall-clock timings of one frame, in milliseconds.
@@ -210,6 +224,8 @@ pub struct GpuRenderer {
     lighting: Option<Lighting>,
     /// The workgroup shapes the sort and the rasteriser were built for.
     executor: Executor,
+    /// Whether frames also carry the alpha and depth passes ([`PassImages`]).
+    passes: bool,
 }
 
 #[derive(Default)]
@@ -274,7 +290,7 @@ impl GpuRenderer {
             tile_keys: passes::TileKeys::new(device, 1, scan.clone()),
             tile_sort: passes::TileSort { sort, scan },
             tile_ranges: passes::TileRanges(Ranges::new(device)),
-            rasterize: passes::Rasterize::new(gpu, 1, executor),
+            rasterize: passes::Rasterize::new(gpu, 1, executor, false),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame"),
                 size: std::mem::size_of::<Frame>() as u64,
@@ -296,7 +312,21 @@ impl GpuRenderer {
             profile: false,
             lighting: None,
             executor,
+            passes: false,
         }
+    }
+
+    /// Render the alpha and depth passes with every frame from now on (or stop): the
+    /// rasteriser writes them beside the colour from the same compositing.
+    pub fn set_passes(&mut self, gpu: &GpuContext, on: bool) {
+        if on == self.passes {
+            return;
+        }
+        self.passes = on;
+        let pages = self.splats.as_ref().map_or(1, |s| s.pages.pages.count);
+        self.rasterize = passes::Rasterize::new(gpu, pages, self.executor, on);
+        self.frame_buffers = None;
+        self.bound = None;
     }
 
     /// Time each pass on its own (submit and wait after each): for benchmarks only, as it
@@ -479,13 +509,21 @@ impl GpuRenderer {
         let render_ms = start.elapsed().as_secs_f64() * 1e3;
 
         let start = std::time::Instant::now();
-        let (rgba, stats) = self.read_image(gpu, f)?;
+        let (mut rgba, stats) = self.read_image(gpu, f)?;
         let readback_ms = start.elapsed().as_secs_f64() * 1e3;
+        let plane = (f.width * f.height * 4) as usize;
+        let passes = self.passes.then(|| {
+            let depth = bytemuck::pod_collect_to_vec(&rgba[2 * plane..3 * plane]);
+            let alpha = rgba[plane..2 * plane].to_vec();
+            PassImages { alpha, depth }
+        });
+        rgba.truncate(plane);
         Ok((
             RenderedImage {
                 width: f.width,
                 height: f.height,
                 rgba,
+                passes,
                 stats,
                 dropped_intersections: 0,
             },

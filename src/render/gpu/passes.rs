@@ -389,11 +389,13 @@ impl SplatReads {
 }
 
 impl Rasterize {
-    /// For `executor`'s workgroup shape, with the reads that shape allows on `gpu`.
-    pub fn new(gpu: &GpuContext, pages: u32, executor: Executor) -> Rasterize {
+    /// For `executor`'s workgroup shape, with the reads that shape allows on `gpu`; with
+    /// `passes`, also the alpha and depth planes of the image.
+    pub fn new(gpu: &GpuContext, pages: u32, executor: Executor, passes: bool) -> Rasterize {
         let reads = SplatReads::for_adapter(gpu, executor);
         let src = Source::new()
             .define("QUADS", rasterize_quads(executor))
+            .define("PASSES", passes)
             .module(&COMMON)
             .generated(reads.source().to_string())
             .generated(projected_reader(pages))

@@ -111,7 +111,7 @@ impl GpuRenderer {
             // The passes that read projections in any order declare one binding per page.
             self.tile_keys =
                 passes::TileKeys::new(&gpu.device, pages.count, self.tile_keys.scan.clone());
-            self.rasterize = passes::Rasterize::new(gpu, pages.count, self.executor);
+            self.rasterize = passes::Rasterize::new(gpu, pages.count, self.executor, self.passes);
         }
         let device = &gpu.device;
         let (gaussians, words) = layout::pack_splats(splats);

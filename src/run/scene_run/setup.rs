@@ -46,6 +46,9 @@ pub(super) fn create_outputs(job: &Job, dir: &Path) -> Result<()> {
     if let Some(d) = &job.opts.export_particles {
         create_dir(d, "particle export directory")?;
     }
+    for pass in &job.opts.passes {
+        create_dir(&pass.dir(dir), "pass directory")?;
+    }
     Ok(())
 }
 
