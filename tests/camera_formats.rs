@@ -98,8 +98,45 @@ fn every_format_gives_the_training_cameras() {
     );
 }
 
-/// Frames 0–2 of a scene that draws the plant untouched from a camera file's cameras, at
-/// 192×108: RGBA bytes per frame.
+/// The PNG bytes of frames 0–2 of the plant (untouched) seen by `camera`, at 192×108,
+/// rendered deterministically into `dir/frames_NAME` (the frames' cameras also written to
+/// `export_cameras`).
+fn render_plant(
+    dir: &Path,
+    name: &str,
+    camera: serde_json::Value,
+    export_cameras: Option<PathBuf>,
+) -> Vec<Vec<u8>> {
+    let scene = serde_json::json!({
+        "output": {"width": 192, "height": 108, "frames": 3},
+        "camera": camera,
+        "objects": [{"ply": data("plant_14k.spz")}],
+    });
+    let scene_file = dir.join(format!("{name}.json"));
+    std::fs::write(&scene_file, scene.to_string()).unwrap();
+    let out = dir.join(format!("frames_{name}"));
+    let _ = std::fs::remove_dir_all(&out);
+    let run = Run::prepare(RunOptions {
+        input: Input::Scene(Some(scene_file)),
+        out: Some(out.clone()),
+        export_cameras,
+        deterministic: true,
+        ..RunOptions::default()
+    })
+    .unwrap();
+    let gpu = splatter::gpu::GpuContext::new(None).expect("a wgpu adapter");
+    run.execute(&gpu, &mut |_| {}).unwrap();
+    (0..3)
+        .map(|f| std::fs::read(out.join(format!("frame_{f:05}.png"))).unwrap())
+        .collect()
+}
+
+/// RGBA bytes of a PNG.
+fn rgba(png: &[u8]) -> Vec<u8> {
+    image::load_from_memory(png).unwrap().to_rgba8().into_raw()
+}
+
+/// [`render_plant`] through a camera file's path (`path_type`), as RGBA.
 fn render_through(
     dir: &Path,
     path_type: &str,
@@ -110,32 +147,8 @@ fn render_through(
     if let Some(d) = dataparser {
         path["dataparser_transforms"] = serde_json::json!(d);
     }
-    let scene = serde_json::json!({
-        "output": {"width": 192, "height": 108, "frames": 3},
-        "camera": {"path": path},
-        "objects": [{"ply": data("plant_14k.spz")}],
-    });
-    let scene_file = dir.join(format!("{path_type}.json"));
-    std::fs::write(&scene_file, scene.to_string()).unwrap();
-    let out = dir.join(format!("frames_{path_type}"));
-    let _ = std::fs::remove_dir_all(&out);
-    let run = Run::prepare(RunOptions {
-        input: Input::Scene(Some(scene_file)),
-        out: Some(out.clone()),
-        deterministic: true,
-        ..RunOptions::default()
-    })
-    .unwrap();
-    let gpu = splatter::gpu::GpuContext::new(None).expect("a wgpu adapter");
-    run.execute(&gpu, &mut |_| {}).unwrap();
-    (0..3)
-        .map(|f| {
-            image::open(out.join(format!("frame_{f:05}.png")))
-                .unwrap()
-                .to_rgba8()
-                .into_raw()
-        })
-        .collect()
+    let frames = render_plant(dir, path_type, serde_json::json!({"path": path}), None);
+    frames.iter().map(|png| rgba(png)).collect()
 }
 
 /// The training views through each format's camera path against the same views through
@@ -166,38 +179,17 @@ fn training_views_render_alike_in_every_format() {
 fn exported_cameras_read_back_give_the_same_frames() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
-    let scene = serde_json::json!({
-        "output": {"width": 192, "height": 108, "frames": 3},
-        "camera": {"fov_y_deg": 45, "path": {"type": "orbit", "target": [0, 0, 0], "radius": 1.6, "height": 0.4, "turns": 0.3}},
-        "objects": [{"ply": data("plant_14k.spz")}],
-    });
-    let scene_file = d.join("orbit.json");
-    std::fs::write(&scene_file, scene.to_string()).unwrap();
-    let run = Run::prepare(RunOptions {
-        input: Input::Scene(Some(scene_file)),
-        out: Some(d.join("orbit")),
-        export_cameras: Some(d.join("cams")),
-        deterministic: true,
-        ..RunOptions::default()
-    })
-    .unwrap();
-    let gpu = splatter::gpu::GpuContext::new(None).expect("a wgpu adapter");
-    run.execute(&gpu, &mut |_| {}).unwrap();
-    let frames = |out: &Path| -> Vec<Vec<u8>> {
-        (0..3)
-            .map(|f| std::fs::read(out.join(format!("frame_{f:05}.png"))).unwrap())
-            .collect()
-    };
-    let orbit = frames(&d.join("orbit"));
-    render_through(d, "cameras_json", &d.join("cams/cameras.json"), None);
+    let orbit = serde_json::json!({"fov_y_deg": 45, "path": {"type": "orbit", "target": [0, 0, 0], "radius": 1.6, "height": 0.4, "turns": 0.3}});
+    let orbit = render_plant(d, "orbit", orbit, Some(d.join("cams")));
+    let inria =
+        serde_json::json!({"path": {"type": "cameras_json", "file": d.join("cams/cameras.json")}});
     assert!(
-        frames(&d.join("frames_cameras_json")) == orbit,
+        render_plant(d, "cameras_json", inria, None) == orbit,
         "the exported cameras.json does not give the orbit's frames"
     );
     let via_path = render_through(d, "nerfstudio", &d.join("cams/camera_path.json"), None);
     for (f, png) in orbit.iter().enumerate() {
-        let a = image::load_from_memory(png).unwrap().to_rgba8().into_raw();
-        let psnr = cpu::psnr(&a, &via_path[f]);
+        let psnr = cpu::psnr(&rgba(png), &via_path[f]);
         eprintln!("camera_path.json read back: frame {f} {psnr:.1} dB");
         assert!(psnr >= 40.0, "frame {f}: {psnr:.1} dB");
     }

@@ -60,6 +60,21 @@ fn facing_camera(z: f32, size: u32) -> Camera {
     )
 }
 
+/// One white isotropic Gaussian of standard deviation `sigma` and `opacity` at the origin.
+fn white_gaussian(sigma: f32, opacity: f32) -> Splats {
+    Splats {
+        means: vec![Vec3::ZERO],
+        covariances: vec![sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(
+            sigma * sigma,
+        )))],
+        rotations: vec![Quat::IDENTITY],
+        opacities: vec![opacity],
+        sh_degree: 0,
+        sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
+        ..Default::default()
+    }
+}
+
 #[test]
 fn gpu_matches_cpu_reference_on_random_scenes() {
     for gpu in gpus() {
@@ -97,17 +112,7 @@ fn isotropic_gaussian_has_the_analytic_profile() {
         let sigma = 0.05f32;
         let z = 2.0f32;
         let opacity = 0.8f32;
-        let splats = Splats {
-            means: vec![Vec3::ZERO],
-            covariances: vec![sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(
-                sigma * sigma,
-            )))],
-            rotations: vec![Quat::IDENTITY],
-            opacities: vec![opacity],
-            sh_degree: 0,
-            sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
-            ..Default::default()
-        };
+        let splats = white_gaussian(sigma, opacity);
         // 64×64 so the mean is at pixel (32, 32).
         let cam = facing_camera(z, 64);
         renderer.upload(&gpu, &splats).unwrap();
@@ -142,17 +147,7 @@ fn isotropic_gaussian_has_the_analytic_profile() {
 #[test]
 fn the_passes_of_a_single_gaussian_are_analytic() {
     let (sigma, z, opacity) = (0.05f32, 2.0f32, 0.8f32);
-    let splats = Splats {
-        means: vec![Vec3::ZERO],
-        covariances: vec![sym3_from_mat3(Mat3::from_diagonal(Vec3::splat(
-            sigma * sigma,
-        )))],
-        rotations: vec![Quat::IDENTITY],
-        opacities: vec![opacity],
-        sh_degree: 0,
-        sh: sh::rgb_to_dc([1.0, 1.0, 1.0]).to_vec(),
-        ..Default::default()
-    };
+    let splats = white_gaussian(sigma, opacity);
     let cam = facing_camera(z, 64);
     let bg = Vec3::new(0.2, 0.3, 0.4);
     let s2 = (cam.fx * sigma / z).powi(2) + 0.3;

@@ -13,8 +13,6 @@ pub enum Pass {
 }
 
 impl Pass {
-    pub const ALL: [Pass; 2] = [Pass::Alpha, Pass::Depth];
-
     /// Its name on the command line and its folder in the output directory.
     pub fn name(self) -> &'static str {
         match self {

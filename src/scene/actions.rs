@@ -12,13 +12,19 @@ use crate::sim::actions::{Action, ActionKind, Drive, Path, MAX_ACTIONS};
 /// An action checked but not yet sized: a force still waits for its region's mass.
 #[derive(Clone, Debug)]
 pub(super) struct Draft {
-    kind: ActionKind,
-    /// The force (N) of an impulse given as one.
-    force: Option<DVec3>,
+    kind: DraftKind,
     from: f64,
     to: f64,
     region: Option<SelectSpec>,
     field: String,
+}
+
+/// What a draft does: an action ready as it is, or an impulse given as a force (N), whose
+/// acceleration waits for the region's mass.
+#[derive(Clone, Debug)]
+enum DraftKind {
+    Ready(ActionKind),
+    Force(DVec3),
 }
 
 /// Object `i`'s actions (`specs`), checked; `before` actions of earlier objects already
@@ -84,10 +90,9 @@ impl ActionSpec {
         if let Some(r) = &self.region {
             r.validate(origin, &format!("{field}.region"))?;
         }
-        let (kind, force) = self.kind(origin, field)?;
+        let kind = self.kind(origin, field)?;
         Ok(Draft {
             kind,
-            force,
             from: self.from,
             to,
             region: self.region.clone(),
@@ -95,24 +100,20 @@ impl ActionSpec {
         })
     }
 
-    /// What the action does, and the force of an impulse given as one.
-    fn kind(&self, origin: &str, field: &str) -> Result<(ActionKind, Option<DVec3>), SceneError> {
+    /// What the action does (an impulse given as a force waits for its region's mass).
+    fn kind(&self, origin: &str, field: &str) -> Result<DraftKind, SceneError> {
+        use DraftKind::{Force, Ready};
         if let Some(imp) = &self.impulse {
             let at = format!("{field}.impulse");
             return match (imp.acceleration, imp.force) {
                 (Some(a), None) => {
                     finite3(origin, &format!("{at}.acceleration"), a)?;
-                    Ok((
-                        ActionKind::Impulse {
-                            acceleration: DVec3::from(a),
-                        },
-                        None,
-                    ))
+                    let acceleration = DVec3::from(a);
+                    Ok(Ready(ActionKind::Impulse { acceleration }))
                 }
                 (None, Some(f)) => {
                     finite3(origin, &format!("{at}.force"), f)?;
-                    let acceleration = DVec3::ZERO;
-                    Ok((ActionKind::Impulse { acceleration }, Some(DVec3::from(f))))
+                    Ok(Force(DVec3::from(f)))
                 }
                 _ => Err(SceneError::invalid(
                     origin,
@@ -123,25 +124,25 @@ impl ActionSpec {
             };
         }
         let Some(drive) = &self.drive else {
-            return Ok((ActionKind::Hold, None));
+            return Ok(Ready(ActionKind::Hold));
         };
         let at = format!("{field}.drive");
-        match (&drive.velocity, &drive.path) {
+        let drive = match (&drive.velocity, &drive.path) {
             (Some(u), None) => {
                 finite3(origin, &format!("{at}.velocity"), *u)?;
-                Ok((ActionKind::Drive(Drive::Velocity(DVec3::from(*u))), None))
+                Drive::Velocity(DVec3::from(*u))
             }
-            (None, Some(keys)) => Ok((
-                ActionKind::Drive(Drive::Path(path(origin, &at, keys)?)),
-                None,
-            )),
-            _ => Err(SceneError::invalid(
-                origin,
-                at,
-                "both or neither of velocity and path",
-                "exactly one of `velocity` (m/s) or `path` (keyframes)",
-            )),
-        }
+            (None, Some(keys)) => Drive::Path(path(origin, &at, keys)?),
+            _ => {
+                return Err(SceneError::invalid(
+                    origin,
+                    at,
+                    "both or neither of velocity and path",
+                    "exactly one of `velocity` (m/s) or `path` (keyframes)",
+                ))
+            }
+        };
+        Ok(Ready(ActionKind::Drive(drive)))
     }
 }
 
@@ -204,11 +205,11 @@ impl Draft {
         if region_mass == 0.0 {
             return Err(self.empty(origin, xs, labels));
         }
-        let kind = match self.force {
-            Some(f) => ActionKind::Impulse {
+        let kind = match self.kind {
+            DraftKind::Force(f) => ActionKind::Impulse {
                 acceleration: f / region_mass,
             },
-            None => self.kind,
+            DraftKind::Ready(kind) => kind,
         };
         Ok(Action {
             kind,

@@ -89,6 +89,23 @@ pub struct GpuSim {
     saved: Option<Vec<wgpu::Buffer>>,
 }
 
+/// Records uploaded for every substep of a call, copied into the step constants before
+/// each substep (outside any compute pass, so the passes of that substep see them).
+struct SubstepRecords {
+    buffer: wgpu::Buffer,
+    /// Bytes per substep.
+    per_step: u64,
+    /// Where they go in the step constants (`GpuStep`).
+    at: u64,
+}
+
+impl SubstepRecords {
+    fn copy(&self, enc: &mut wgpu::CommandEncoder, step: &wgpu::Buffer, s: u32) {
+        let from = u64::from(s) * self.per_step;
+        enc.copy_buffer_to_buffer(&self.buffer, from, step, self.at, Some(self.per_step));
+    }
+}
+
 /// A buffer of per-substep records that the step copies into its constants.
 fn copy_source<T: Pod>(gpu: &GpuContext, label: &str, data: &[T]) -> wgpu::Buffer {
     gpu.device
@@ -296,110 +313,82 @@ impl GpuSim {
         self.time.get()
     }
 
-    /// The moving colliders' poses for `steps` substeps from the current time, one block of
-    /// `kinematic.len()` poses per substep; `None` without moving colliders.
-    fn upload_poses(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
-        if self.kinematic.is_empty() || steps == 0 {
-            return None;
+    /// `records(t, out)` pushed for the start time t of each of `steps` substeps from the
+    /// current time, uploaded once, to be copied before each substep into the step
+    /// constants at byte `at`; `None` when a substep has no records.
+    fn substep_records<T: Pod>(
+        &self,
+        gpu: &GpuContext,
+        (label, steps, at): (&str, u32, usize),
+        records: impl Fn(f64, &mut Vec<T>),
+    ) -> Option<SubstepRecords> {
+        let t0 = self.time.get();
+        let mut all = Vec::new();
+        for s in 0..steps {
+            records(t0 + f64::from(s) * self.dt, &mut all);
         }
-        let t0 = self.time.get();
-        let poses: Vec<GpuPose> = (0..steps)
-            .flat_map(|s| {
-                let t = t0 + f64::from(s) * self.dt;
-                self.kinematic
-                    .iter()
-                    .map(move |k| GpuPose::from_cpu(&k.motion.pose(t)))
-            })
-            .collect();
-        Some(copy_source(gpu, "sim kinematic poses", &poses))
+        let per_step = all.len() / steps.max(1) as usize * std::mem::size_of::<T>();
+        (per_step > 0).then(|| SubstepRecords {
+            buffer: copy_source(gpu, label, &all),
+            per_step: per_step as u64,
+            at: at as u64,
+        })
     }
 
-    /// Copy substep `s`'s poses into the step constants (outside any compute pass, so the
-    /// passes of that substep see them).
-    fn copy_poses(&self, enc: &mut wgpu::CommandEncoder, poses: &wgpu::Buffer, s: u32) {
-        let size = (self.kinematic.len() * std::mem::size_of::<GpuPose>()) as u64;
-        let at = std::mem::offset_of!(GpuStep, poses) as u64;
-        enc.copy_buffer_to_buffer(
-            poses,
-            u64::from(s) * size,
-            &self.buffers.step,
-            at,
-            Some(size),
+    /// What the step constants take per substep: the moving colliders' poses, a gusty
+    /// wind's velocity and drag (a steady wind is in the constants already), the timed
+    /// actions' effects.
+    fn per_substep(&self, gpu: &GpuContext, steps: u32) -> Vec<SubstepRecords> {
+        use std::mem::offset_of;
+        let poses = self.substep_records(
+            gpu,
+            ("sim kinematic poses", steps, offset_of!(GpuStep, poses)),
+            |t, out| {
+                out.extend(
+                    self.kinematic
+                        .iter()
+                        .map(|k| GpuPose::from_cpu(&k.motion.pose(t))),
+                )
+            },
         );
-    }
-
-    /// A gusty wind's velocity and drag for `steps` substeps from the current time, one
-    /// 16-byte record per substep; `None` for a steady wind or none.
-    fn upload_winds(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
-        let wind = self.gusty_wind.as_ref().filter(|_| steps > 0)?;
-        let t0 = self.time.get();
-        let records: Vec<[f32; 4]> = (0..steps)
-            .map(|s| {
-                let w = wind.velocity_at(t0 + f64::from(s) * self.dt).as_vec3();
-                [w.x, w.y, w.z, wind.drag as f32]
-            })
-            .collect();
-        Some(copy_source(gpu, "sim gusty wind", &records))
-    }
-
-    /// Copy substep `s`'s wind into the step constants (`wind` and `wind_drag`, adjacent).
-    fn copy_wind(&self, enc: &mut wgpu::CommandEncoder, winds: &wgpu::Buffer, s: u32) {
-        let at = std::mem::offset_of!(GpuStep, wind) as u64;
-        enc.copy_buffer_to_buffer(winds, u64::from(s) * 16, &self.buffers.step, at, Some(16));
-    }
-
-    /// The timed actions' effects for `steps` substeps from the current time, one table of
-    /// `actions.len()` records per substep; `None` without actions.
-    fn upload_actions(&self, gpu: &GpuContext, steps: u32) -> Option<wgpu::Buffer> {
-        if self.actions.is_empty() || steps == 0 {
-            return None;
-        }
-        let t0 = self.time.get();
-        let records: Vec<GpuAction> = (0..steps)
-            .flat_map(|s| {
-                let t = t0 + f64::from(s) * self.dt;
-                self.actions
-                    .iter()
-                    .map(move |a| GpuAction::from_cpu(a.effect(t, self.dt)))
-            })
-            .collect();
-        Some(copy_source(gpu, "sim action effects", &records))
-    }
-
-    /// Copy substep `s`'s action effects into the step constants.
-    fn copy_actions(&self, enc: &mut wgpu::CommandEncoder, effects: &wgpu::Buffer, s: u32) {
-        let size = (self.actions.len() * std::mem::size_of::<GpuAction>()) as u64;
-        let at = std::mem::offset_of!(GpuStep, actions) as u64;
-        enc.copy_buffer_to_buffer(
-            effects,
-            u64::from(s) * size,
-            &self.buffers.step,
-            at,
-            Some(size),
+        let winds = self.gusty_wind.and_then(|wind| {
+            self.substep_records(
+                gpu,
+                ("sim gusty wind", steps, offset_of!(GpuStep, wind)),
+                |t, out| {
+                    let w = wind.velocity_at(t).as_vec3();
+                    // `wind` and `wind_drag` are adjacent in the constants.
+                    out.push([w.x, w.y, w.z, wind.drag as f32]);
+                },
+            )
+        });
+        let effects = self.substep_records(
+            gpu,
+            ("sim action effects", steps, offset_of!(GpuStep, actions)),
+            |t, out| {
+                out.extend(
+                    self.actions
+                        .iter()
+                        .map(|a| GpuAction::from_cpu(a.effect(t, self.dt))),
+                )
+            },
         );
+        [poses, winds, effects].into_iter().flatten().collect()
     }
 
     /// Record `steps` substeps into one command buffer and submit it; nothing is read back.
     /// Moving colliders get each substep's pose, a gusty wind its velocity and the timed
     /// actions their effects, from one upload per call.
     pub fn step(&self, gpu: &GpuContext, steps: u32) -> Result<(), GpuError> {
-        let poses = self.upload_poses(gpu, steps);
-        let winds = self.upload_winds(gpu, steps);
-        let effects = self.upload_actions(gpu, steps);
+        let per_substep = self.per_substep(gpu, steps);
         let mut enc = gpu
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("sim steps"),
             });
         for s in 0..steps {
-            if let Some(p) = &poses {
-                self.copy_poses(&mut enc, p, s);
-            }
-            if let Some(w) = &winds {
-                self.copy_wind(&mut enc, w, s);
-            }
-            if let Some(e) = &effects {
-                self.copy_actions(&mut enc, e, s);
+            for records in &per_substep {
+                records.copy(&mut enc, &self.buffers.step, s);
             }
             let which = if s == 0 {
                 StepPasses::First

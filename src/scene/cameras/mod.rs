@@ -42,8 +42,6 @@ pub struct FileCamera {
 #[derive(Clone, Debug, Default)]
 pub struct CameraFile {
     pub cameras: Vec<FileCamera>,
-    /// The file's frame rate, where it has one (nerfstudio's camera paths).
-    pub fps: Option<f32>,
     /// Lines for the user (distortion ignored, an off-centre principal point, …).
     pub warnings: Vec<String>,
 }

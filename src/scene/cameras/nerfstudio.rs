@@ -1,7 +1,8 @@
 //! nerfstudio's `camera_path.json`, as its viewer writes a render path: `camera_path`
 //! entries of `{camera_to_world, fov, aspect}` (the matrix as 16 numbers, rows first, OpenGL
 //! axes; `fov` the vertical field of view in degrees), the render size `render_width` ×
-//! `render_height` and `fps`. The poses are in nerfstudio's normalised world; with the
+//! `render_height` (its `fps` is left to the scene's `output.fps`, which times every path).
+//! The poses are in nerfstudio's normalised world; with the
 //! training run's `dataparser_transforms.json` (`transform`, three rows of four, and
 //! `scale`: x_ns = scale · (T x + t)) they map back into the capture's frame,
 //! x = T⁻¹ (x_ns / scale − t), as nerfstudio's own exporter does.
@@ -29,8 +30,6 @@ struct File {
     render_width: Option<u32>,
     render_height: u32,
     #[serde(default)]
-    fps: Option<f32>,
-    #[serde(default)]
     camera_type: Option<String>,
 }
 
@@ -45,10 +44,7 @@ pub fn read(path: &Path, dataparser: Option<&Path>) -> Result<CameraFile, SceneE
     let origin = path.display().to_string();
     let file: File =
         serde_json::from_str(&read_text(path)?).map_err(|e| SceneError::parse(&origin, &e))?;
-    let mut out = CameraFile {
-        fps: file.fps,
-        ..Default::default()
-    };
+    let mut out = CameraFile::default();
     if let Some(t) = file.camera_type.as_deref().filter(|t| *t != "perspective") {
         return Err(SceneError::invalid(
             &origin,
