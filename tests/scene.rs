@@ -318,7 +318,7 @@ fn default_scene_parses_and_validates() {
     s.validate().unwrap();
     assert_eq!(
         (s.output.width, s.output.height, s.frame_count()),
-        (640, 360, 36)
+        (640, 360, 24)
     );
     assert_eq!(s.output_dir(), Path::new("out/default"));
     assert!(s.objects.len() >= 4);

@@ -139,7 +139,7 @@ mod tests {
     fn only_runs_of_some_seconds_race() {
         // the donut capture dropped as jelly: 1161 particles, 12 frames of 214 steps
         assert!(!P2gRace::worth_running(1161, 12 * 214));
-        // the default scene: 8888 particles, 226 steps a frame up to its last frame, 35
+        // a NACC watermelon and a jelly: 8888 particles, 226 steps a frame for 35 frames
         assert!(P2gRace::worth_running(8888, 35 * 226));
     }
 
