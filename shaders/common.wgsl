@@ -15,11 +15,13 @@ struct GaussianIn {
 
 // A Gaussian after projection to the screen. 48 bytes.
 struct Projected {
-    // xy: pixel position of the mean, z: opacity, w: unused
+    // xy: pixel position of the mean, z: opacity, w: the id pass's id (a whole number,
+    // 0 for none; written with IDS only)
     xy_opacity: vec4<f32>,
-    // inverse of the 2D covariance: (a, b, c) of [[a, b], [b, c]], w unused
+    // inverse of the 2D covariance: (a, b, c) of [[a, b], [b, c]], w: camera-space depth
     conic: vec4<f32>,
-    // rgb: colour from SH, w unused
+    // rgb: colour from SH, w: the camera-space normal as `normal_code` packs it (written
+    // with NORMALS only)
     color: vec4<f32>,
 }
 
@@ -128,4 +130,38 @@ fn ellipse_touches_tile(xy: vec2<f32>, conic: vec3<f32>, k2: f32, tile: vec2<u32
 struct PageRange {
     base: u32,
     count: u32,
+}
+
+// Steps of each octahedral coordinate of `normal_code`.
+const NORMAL_STEPS: f32 = 4095.0;
+
+// A unit normal as a whole number that an f32 holds exactly (so it can ride in a spare
+// float of `Projected`): the octahedral map onto [−1, 1]², each coordinate quantised to
+// 12 bits, 1 + u·4096 + v. 0 is no normal (a zero or non-finite vector). Mirrors
+// `render::cpu::normal_code`.
+fn normal_code(n: vec3<f32>) -> f32 {
+    let l1 = abs(n.x) + abs(n.y) + abs(n.z);
+    if !(l1 > 0.0) || (bitcast<u32>(l1) & 0x7f800000u) == 0x7f800000u {
+        return 0.0;
+    }
+    var e = n.xy / l1;
+    if n.z < 0.0 {
+        let sgn = select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+        e = (vec2<f32>(1.0) - abs(e.yx)) * sgn;
+    }
+    let q = floor((clamp(e, vec2<f32>(-1.0), vec2<f32>(1.0)) * 0.5 + 0.5) * NORMAL_STEPS + 0.5);
+    return 1.0 + q.x * 4096.0 + q.y;
+}
+
+// The unit normal of a `normal_code`, (0, 0, 0) for code 0.
+fn normal_from_code(code: f32) -> vec3<f32> {
+    if code < 1.0 {
+        return vec3<f32>(0.0);
+    }
+    let c = u32(code) - 1u;
+    let e = vec2<f32>(f32(c / 4096u), f32(c % 4096u)) / NORMAL_STEPS * 2.0 - 1.0;
+    let z = 1.0 - abs(e.x) - abs(e.y);
+    let t = max(-z, 0.0);
+    let sgn = select(vec2<f32>(-1.0), vec2<f32>(1.0), e >= vec2<f32>(0.0));
+    return normalize(vec3<f32>(e - sgn * t, z));
 }

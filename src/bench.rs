@@ -9,7 +9,7 @@ use glam::{Mat3, Quat, Vec3};
 
 use crate::gpu::GpuContext;
 use crate::render::splats::sym3_from_mat3;
-use crate::render::{Camera, GpuRenderer, Splats};
+use crate::render::{Camera, GpuRenderer, PassSet, Splats};
 use crate::rng::SplitMix64;
 
 mod sim;
@@ -181,17 +181,22 @@ pub fn render_bench(
                 list.join(", ")
             )?;
         }
-        renderer.set_passes(gpu, true);
-        let with_passes = time_render(gpu, &mut renderer, &camera, repeat)?;
-        renderer.set_passes(gpu, false);
-        writeln!(
-            out,
-            "{:>22} with the alpha and depth passes: render ms {:.2} ({:+.0}%), readback ms {:.2}",
-            "",
-            with_passes.render_ms,
-            100.0 * (with_passes.render_ms / t.render_ms - 1.0),
-            with_passes.readback_ms
-        )?;
+        for (what, set) in [
+            ("the alpha and depth passes", PassSet::ALPHA_DEPTH),
+            ("all passes", PassSet::ALL),
+        ] {
+            renderer.set_passes(gpu, set);
+            let with_passes = time_render(gpu, &mut renderer, &camera, repeat)?;
+            writeln!(
+                out,
+                "{:>22} with {what}: render ms {:.2} ({:+.0}%), readback ms {:.2}",
+                "",
+                with_passes.render_ms,
+                100.0 * (with_passes.render_ms / t.render_ms - 1.0),
+                with_passes.readback_ms
+            )?;
+        }
+        renderer.set_passes(gpu, PassSet::default());
         let lit = lit_frame(gpu, n, &camera, repeat)?;
         writeln!(
             out,

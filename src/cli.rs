@@ -174,6 +174,8 @@ impl P2gArg {
 pub(crate) enum PassArg {
     Alpha,
     Depth,
+    Normal,
+    Id,
 }
 
 impl PassArg {
@@ -182,6 +184,8 @@ impl PassArg {
         match self {
             PassArg::Alpha => Pass::Alpha,
             PassArg::Depth => Pass::Depth,
+            PassArg::Normal => Pass::Normal,
+            PassArg::Id => Pass::Id,
         }
     }
 }
@@ -243,9 +247,13 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "DIR")]
     pub(crate) export_cameras: Option<PathBuf>,
     /// Also write passes beside each frame, from the same compositing: `alpha`
-    /// (OUT/alpha/frame_00000.png, RGBA with straight colour) and `depth`
+    /// (OUT/alpha/frame_00000.png, RGBA with straight colour), `depth`
     /// (OUT/depth/frame_00000.exr, one float channel Z: the alpha-weighted mean camera-space
-    /// depth, +inf where nothing was drawn). A comma-separated list (docs/scene-format.md).
+    /// depth, +inf where nothing was drawn), `normal` (OUT/normal/frame_00000.exr, channels
+    /// R, G, B: the alpha-weighted camera-space normal, x right, y down, z forward) and `id`
+    /// (OUT/id/frame_00000.png, 16-bit grey: the id of the object and region that
+    /// contributes most, named in the manifest's `ids`). A comma-separated list
+    /// (docs/scene-format.md).
     #[arg(long, value_delimiter = ',', value_name = "PASS")]
     pub(crate) passes: Vec<PassArg>,
     /// Quick look at a capture (any splat format) without a scene file: stood upright

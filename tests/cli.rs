@@ -713,6 +713,96 @@ fn cameras_json_path_with_a_transformed_capture_warns() {
     assert!(warnings(&out).is_empty(), "{}", describe(&out));
 }
 
+/// `--passes normal,id` on a lit sphere (its normals the relighting's PCA normals) and an
+/// unlit one (its Gaussians' least axes): OUT/normal/frame_00000.exr (channels R, G, B,
+/// read back by the exr crate) holds unit camera-space normals that face the camera and
+/// point outwards (left of the lit ball's centre x < 0, above it y < 0: camera y is down),
+/// (0, 0, 0) where nothing was drawn; OUT/id/frame_00000.png is a 16-bit grey PNG whose
+/// ids the manifest's `ids` table names, one per object, 0 exactly where no normal is.
+#[test]
+fn normal_and_id_passes_name_what_each_pixel_shows() {
+    let dir = workdir();
+    let scene = r#"{
+  "output": {"width": 96, "height": 64, "frames": 1},
+  "camera": {"fov_y_deg": 40, "path": {"type": "orbit", "target": [0.4, 0, 0], "radius": 3.5, "height": 0}},
+  "objects": [
+    {"name": "lit ball", "procedural": {"shape": "sphere", "radius": 0.45, "spacing": 0.06, "color": [0.9, 0.2, 0.1]}},
+    {"name": "other", "procedural": {"shape": "sphere", "radius": 0.3, "spacing": 0.06, "color": [0.2, 0.9, 0.1]},
+     "transform": {"translate": [0, 0.9, 0]}}
+  ],
+  "lighting": {"ambient": [0.5, 0.5, 0.5], "lights": [{"position": [3, 1, 2]}], "shadows": {"enabled": false}}
+}"#;
+    write(dir.path(), "lit.json", scene);
+    let out = splatter(
+        dir.path(),
+        &["render", "lit.json", "--out", "o", "--passes", "normal,id"],
+    );
+    expect_success(&out);
+    let manifest: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("o/manifest.json")).unwrap())
+            .unwrap();
+    let table = manifest["settings"]["ids"]
+        .as_array()
+        .expect("the ids table");
+    let names: Vec<(u64, &str)> = table
+        .iter()
+        .map(|e| (e["id"].as_u64().unwrap(), e["object"].as_str().unwrap()))
+        .collect();
+    assert_eq!(names, [(1, "lit ball"), (2, "other")]);
+    let ids = image::open(dir.path().join("o/id/frame_00000.png")).unwrap();
+    assert_eq!(ids.color(), image::ColorType::L16);
+    let ids = ids.to_luma16();
+    let exr =
+        exr::prelude::read_first_flat_layer_from_file(dir.path().join("o/normal/frame_00000.exr"))
+            .expect("the normal pass is an OpenEXR file");
+    let channel = |name: &str| -> Vec<f32> {
+        exr.layer_data
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("a channel {name}"))
+            .sample_data
+            .values_as_f32()
+            .collect()
+    };
+    let (nx, ny, nz) = (channel("R"), channel("G"), channel("B"));
+    let (w, h) = (96usize, 64usize);
+    let mut count = [0usize; 3];
+    let (mut lit, mut sum_x) = (Vec::new(), [0.0f32; 2]);
+    for i in 0..w * h {
+        let n = [nx[i], ny[i], nz[i]];
+        let id = ids.as_raw()[i];
+        count[usize::from(id.min(2))] += 1;
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if id == 0 {
+            assert_eq!(len, 0.0, "a normal where nothing was drawn, pixel {i}");
+            continue;
+        }
+        assert!((len - 1.0).abs() < 1e-3, "normal {n:?} at pixel {i}");
+        assert!(n[2] < 0.1, "normal {n:?} at pixel {i} faces away");
+        if id == 1 {
+            lit.push((i % w, i / w, n));
+        }
+    }
+    // the lit ball's pixels: left of its centre column, the normals point left; above its
+    // centre row, up (−y)
+    let cx = lit.iter().map(|p| p.0 as f32).sum::<f32>() / lit.len() as f32;
+    let cy = lit.iter().map(|p| p.1 as f32).sum::<f32>() / lit.len() as f32;
+    let mut sum_y = [0.0f32; 2];
+    for (x, y, n) in &lit {
+        sum_x[usize::from(*x as f32 > cx)] += n[0];
+        sum_y[usize::from(*y as f32 > cy)] += n[1];
+    }
+    eprintln!("pixels (none, lit ball, other) {count:?}; Σ n.x left/right {sum_x:?}, Σ n.y above/below {sum_y:?}");
+    assert!(count.iter().all(|c| *c > 100), "{count:?}");
+    assert!(sum_x[0] < 0.0 && sum_x[1] > 0.0, "n.x left/right {sum_x:?}");
+    assert!(
+        sum_y[0] < 0.0 && sum_y[1] > 0.0,
+        "n.y above/below {sum_y:?}"
+    );
+}
+
 /// `--passes alpha,depth` writes OUT/alpha/frame_00000.png (RGBA: the frame is its
 /// straight colour over the background, within 1/255) and OUT/depth/frame_00000.exr (one
 /// float channel `Z`, read back by the exr crate: the camera distance's range where the

@@ -7,7 +7,7 @@ use glam::{Mat3, Quat, Vec3};
 use splatter::gpu::{Executor, GpuContext};
 use splatter::render::cpu;
 use splatter::render::splats::sym3_from_mat3;
-use splatter::render::{Camera, GpuRenderer, Splats};
+use splatter::render::{Camera, GpuRenderer, PassSet, Splats};
 use splatter::splat::sh;
 
 fn gpus() -> Vec<GpuContext> {
@@ -191,7 +191,8 @@ fn the_passes_of_a_single_gaussian_are_analytic() {
         assert!(worst_alpha <= 1.5 / 255.0, "{what}: α off by {worst_alpha}");
         assert!(worst_depth <= 2e-5, "{what}: depth off by {worst_depth}");
     };
-    let (cpu_rgba, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, true);
+    let (cpu_rgba, cpu_passes) =
+        cpu::render_with_passes(&splats, &cam, bg, PassSet::ALPHA_DEPTH, &[]);
     assert_eq!(cpu_rgba, cpu::render(&splats, &cam, bg));
     check(&cpu_passes.unwrap(), "CPU reference");
     for gpu in gpus() {
@@ -199,7 +200,7 @@ fn the_passes_of_a_single_gaussian_are_analytic() {
         renderer.upload(&gpu, &splats).unwrap();
         let plain = renderer.render(&gpu, &cam, bg).unwrap();
         assert!(plain.passes.is_none());
-        renderer.set_passes(&gpu, true);
+        renderer.set_passes(&gpu, PassSet::ALPHA_DEPTH);
         let image = renderer.render(&gpu, &cam, bg).unwrap();
         assert_eq!(
             image.rgba, plain.rgba,
@@ -229,14 +230,15 @@ fn the_alpha_pass_composited_over_the_background_is_the_frame() {
         }
         worst * 255.0
     };
-    let (cpu_rgba, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, true);
+    let (cpu_rgba, cpu_passes) =
+        cpu::render_with_passes(&splats, &cam, bg, PassSet::ALPHA_DEPTH, &[]);
     let cpu_passes = cpu_passes.unwrap();
     let e = composite_error(&cpu_rgba, &cpu_passes.alpha);
     eprintln!("CPU reference: composited within {e:.2}/255");
     assert!(e <= 1.0, "CPU: {e}/255");
     for gpu in gpus() {
         let mut renderer = GpuRenderer::new(&gpu);
-        renderer.set_passes(&gpu, true);
+        renderer.set_passes(&gpu, PassSet::ALPHA_DEPTH);
         renderer.upload(&gpu, &splats).unwrap();
         let image = renderer.render(&gpu, &cam, bg).unwrap();
         let passes = image.passes.unwrap();
@@ -268,6 +270,185 @@ fn the_alpha_pass_composited_over_the_background_is_the_frame() {
 /// Degree 1, only the z-basis coefficient of red set: seen along a view direction d the red
 /// channel is 0.5 + C1 · d_z · c (docs/method.md §7), while green, with only a DC term, stays 0.5.
 /// Red / green × 0.5 removes the Gaussian's α from the comparison.
+/// A flat Gaussian (a disc, scales 0.5, 0.35 and 0.01) whose axis of least extent is a
+/// known direction d, and the normal pass at every pixel it covers: the camera-space
+/// direction of d turned towards the camera, W·(±d), analytic, within 2e-3 (the normal
+/// rides in 12 bits an octahedral coordinate), on the CPU reference (Jacobi eigenvectors)
+/// and the GPU (the cubic's closed form); (0, 0, 0) where nothing was drawn.
+#[test]
+fn the_normal_pass_of_a_flat_gaussian_is_its_axis() {
+    let cam = camera(96, 96);
+    let bg = Vec3::ZERO;
+    // its normal (local z) turned by 40° about x, then 25° about z
+    let rotation = Quat::from_rotation_z(0.44) * Quat::from_rotation_x(0.7);
+    let r = Mat3::from_quat(rotation);
+    let cov = r * Mat3::from_diagonal(Vec3::new(0.5, 0.35, 0.01).powf(2.0)) * r.transpose();
+    let mut splats = white_gaussian(1.0, 0.9);
+    splats.covariances[0] = sym3_from_mat3(cov);
+    let d = rotation * Vec3::Z;
+    let d = if d.dot(cam.position) < 0.0 { -d } else { d };
+    let expected = cam.world_to_camera() * d;
+    assert!(expected.z < 0.0, "a facing normal points at the camera");
+    let list: Vec<_> = cpu::project_gaussian(&splats, 0, &cam)
+        .into_iter()
+        .collect();
+    let check = |normal: &[[f32; 3]], what: &str| {
+        let (mut worst, mut covered) = (0.0f32, 0);
+        for y in 0..96u32 {
+            for x in 0..96u32 {
+                let n = Vec3::from(normal[(y * 96 + x) as usize]);
+                if cpu::composite_pixel(&list, x, y).alpha() > 0.0 {
+                    covered += 1;
+                    worst = worst.max((n - expected).abs().max_element());
+                } else {
+                    assert_eq!(n, Vec3::ZERO, "{what}: a normal where nothing was drawn");
+                }
+            }
+        }
+        eprintln!("{what}: {covered} pixels drawn, normal within {worst:.1e} of {expected}");
+        assert!((500..9000).contains(&covered), "{what}: {covered}");
+        assert!(worst <= 2e-3, "{what}: normal off by {worst}");
+    };
+    let set = PassSet {
+        normal: true,
+        ..PassSet::default()
+    };
+    let (_, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, set, &[]);
+    check(&cpu_passes.unwrap().normal.unwrap(), "CPU reference");
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.set_passes(&gpu, set);
+        renderer.upload(&gpu, &splats).unwrap();
+        let image = renderer.render(&gpu, &cam, bg).unwrap();
+        check(&image.passes.unwrap().normal.unwrap(), &gpu.describe());
+    }
+}
+
+/// The id pass on two overlapping Gaussians of ids 3 and 7, the nearer one fainter
+/// (ω 0.3 against 0.9): at each pixel the id of the larger analytic weight (w_near =
+/// α_near, w_far = α_far (1 − α_near)), 0 where nothing was drawn, on the CPU reference
+/// and the GPU; pixels within 1e-3 of a tie are left out.
+#[test]
+fn the_id_pass_shows_the_largest_weight() {
+    let cam = facing_camera(2.0, 64);
+    let bg = Vec3::ZERO;
+    let mut near = white_gaussian(0.06, 0.3);
+    let mut far = white_gaussian(0.05, 0.9);
+    near.means[0] = Vec3::new(0.02, 0.0, -0.1);
+    far.means[0] = Vec3::new(-0.05, 0.01, 0.1);
+    let mut splats = far.clone();
+    splats.append(near.clone());
+    let ids = [7u16, 3];
+    let alpha = |g: &Splats, x: u32, y: u32| {
+        let p = cpu::project_gaussian(g, 0, &cam).unwrap();
+        let d = p.xy - glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let power = -0.5 * (p.conic.x * d.x * d.x + p.conic.z * d.y * d.y) - p.conic.y * d.x * d.y;
+        let a = (p.opacity * power.exp()).min(0.99);
+        if a < 1.0 / 255.0 {
+            0.0
+        } else {
+            a
+        }
+    };
+    let check = |got: &[u16], what: &str| {
+        let (mut checked, mut each) = (0, [0usize; 3]);
+        for y in 0..64u32 {
+            for x in 0..64u32 {
+                let (a_near, a_far) = (alpha(&near, x, y), alpha(&far, x, y));
+                let (w_near, w_far) = (a_near, a_far * (1.0 - a_near));
+                if w_near.max(w_far) > 0.0 && (w_near - w_far).abs() < 1e-3 {
+                    continue;
+                }
+                let want = if w_near.max(w_far) == 0.0 {
+                    0
+                } else if w_near > w_far {
+                    3
+                } else {
+                    7
+                };
+                let g = got[(y * 64 + x) as usize];
+                assert_eq!(
+                    g, want,
+                    "{what}: id at ({x}, {y}), weights {w_near} near, {w_far} far"
+                );
+                checked += 1;
+                each[[0, 3, 7].iter().position(|v| *v == want).unwrap()] += 1;
+            }
+        }
+        eprintln!("{what}: {checked} pixels, (none, near, far) = {each:?}");
+        assert!(each.iter().all(|n| *n > 50), "{what}: {each:?}");
+    };
+    let set = PassSet {
+        id: true,
+        ..PassSet::default()
+    };
+    let (_, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, set, &ids);
+    check(&cpu_passes.unwrap().id.unwrap(), "CPU reference");
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.set_passes(&gpu, set);
+        renderer.upload(&gpu, &splats).unwrap();
+        renderer.set_ids(&gpu, &ids).unwrap();
+        let image = renderer.render(&gpu, &cam, bg).unwrap();
+        check(&image.passes.unwrap().id.unwrap(), &gpu.describe());
+    }
+}
+
+/// Every pass at once on a random scene, the GPU against the CPU reference: the colour
+/// frame unchanged by the passes, normals within 3e-3 wherever both drew one (a few
+/// quantisation steps of the packed normal), and the same id at all but a few pixels
+/// (near-ties of two weights may go either way in f32).
+#[test]
+fn all_passes_agree_with_the_reference_on_random_scenes() {
+    let splats = f16_rounded(random_splats(2000, 1, 11));
+    let ids: Vec<u16> = (0..splats.len()).map(|i| (i % 5000) as u16 + 1).collect();
+    let cam = camera(128, 96);
+    let bg = Vec3::new(0.1, 0.2, 0.3);
+    let (_, cpu_passes) = cpu::render_with_passes(&splats, &cam, bg, PassSet::ALL, &ids);
+    let cpu_passes = cpu_passes.unwrap();
+    for gpu in gpus() {
+        let mut renderer = GpuRenderer::new(&gpu);
+        renderer.upload(&gpu, &splats).unwrap();
+        let plain = renderer.render(&gpu, &cam, bg).unwrap();
+        renderer.set_passes(&gpu, PassSet::ALL);
+        renderer.set_ids(&gpu, &ids).unwrap();
+        let image = renderer.render(&gpu, &cam, bg).unwrap();
+        assert_eq!(
+            image.rgba, plain.rgba,
+            "the frame changed with every pass on"
+        );
+        let p = image.passes.unwrap();
+        let (normal, id) = (p.normal.unwrap(), p.id.unwrap());
+        let cpu_normal = cpu_passes.normal.as_ref().unwrap();
+        let mut off: Vec<f32> = normal
+            .iter()
+            .zip(cpu_normal)
+            .map(|(a, b)| (Vec3::from(*a), Vec3::from(*b)))
+            .filter(|(a, b)| *a != Vec3::ZERO && *b != Vec3::ZERO)
+            .map(|(a, b)| (a - b).length())
+            .collect();
+        off.sort_by(f32::total_cmp);
+        let both = off.len();
+        let worst = off.last().copied().unwrap_or(0.0);
+        let same = id
+            .iter()
+            .zip(cpu_passes.id.as_ref().unwrap())
+            .filter(|(a, b)| a == b)
+            .count();
+        let n = id.len();
+        eprintln!(
+            "{}: normals within {worst:.1e} at {both} pixels; ids alike at {same} of {n}",
+            gpu.describe()
+        );
+        assert!(both > n / 3, "{both} of {n}");
+        assert!(worst <= 3e-3, "normals off by {worst}");
+        assert!(
+            same as f64 >= 0.995 * n as f64,
+            "ids alike at {same} of {n}"
+        );
+    }
+}
+
 #[test]
 fn degree_one_colour_follows_the_view_direction() {
     for gpu in gpus() {

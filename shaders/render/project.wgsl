@@ -17,6 +17,9 @@
 @group(0) @binding(6) var<storage, read_write> depth_order: array<u32>;
 @group(0) @binding(7) var<storage, read_write> stats: Stats;
 @group(0) @binding(8) var<storage, read> page: PageRange;
+// The id pass's id of every Gaussian, two 16-bit ids a word (low half first), indexed by
+// page.base + local; read with IDS only.
+@group(0) @binding(9) var<storage, read> ids: array<u32>;
 
 
 fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
@@ -24,6 +27,65 @@ fn rotate_by_conjugate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
     let u = -q.xyz;
     let t = 2.0 * cross(u, v);
     return v + q.w * t + cross(u, t);
+}
+
+// The axis of least extent of the covariance (upper triangle xx, xy, xz, yy / yz, zz),
+// the normal of a flat Gaussian: the eigenvector of its smallest eigenvalue, from the
+// eigenvalues in closed form (the trigonometric solution of the characteristic cubic) and
+// the largest cross product of two rows of Σ − λ I. (0, 0, 0) when the two smallest
+// eigenvalues lie within LEAST_AXIS_GAP of the trace of each other (a sphere or a
+// needle: no axis stands out, and the closed form would pick one by rounding). Mirrors
+// `render::cpu::least_axis` (which takes the Jacobi eigenvectors instead).
+const LEAST_AXIS_GAP: f32 = 0.01;
+
+fn least_axis(cov_a: vec4<f32>, cov_b: vec4<f32>) -> vec3<f32> {
+    let trace = cov_a.x + cov_a.w + cov_b.y;
+    if !(trace > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    // Scaled to unit trace, so that tiny Gaussians lose no precision.
+    let a = cov_a / trace;
+    let b = cov_b / trace;
+    let off = a.y * a.y + a.z * a.z + b.x * b.x;
+    let q = 1.0 / 3.0;
+    let d = vec3<f32>(a.x, a.w, b.y) - q;
+    let p = sqrt((dot(d, d) + 2.0 * off) / 6.0);
+    if p < 0.1 * LEAST_AXIS_GAP {
+        return vec3<f32>(0.0);
+    }
+    let r0 = vec3<f32>(d.x, a.y, a.z) / p;
+    let r1 = vec3<f32>(a.y, d.y, b.x) / p;
+    let r2 = vec3<f32>(a.z, b.x, d.z) / p;
+    let half_det = 0.5 * dot(r0, cross(r1, r2));
+    let phi = acos(clamp(half_det, -1.0, 1.0)) / 3.0;
+    let lambda = q + 2.0 * p * cos(phi + 2.0943951);
+    let middle = 1.0 - (q + 2.0 * p * cos(phi)) - lambda;
+    if middle - lambda < LEAST_AXIS_GAP {
+        return vec3<f32>(0.0);
+    }
+    let s0 = vec3<f32>(a.x - lambda, a.y, a.z);
+    let s1 = vec3<f32>(a.y, a.w - lambda, b.x);
+    let s2 = vec3<f32>(a.z, b.x, b.y - lambda);
+    let c01 = cross(s0, s1);
+    let c02 = cross(s0, s2);
+    let c12 = cross(s1, s2);
+    var best = c01;
+    if dot(c02, c02) > dot(best, best) {
+        best = c02;
+    }
+    if dot(c12, c12) > dot(best, best) {
+        best = c12;
+    }
+    let len2 = dot(best, best);
+    if !(len2 > 1e-12) {
+        return vec3<f32>(0.0);
+    }
+    return best * inverseSqrt(len2);
+}
+
+// The id of Gaussian g (IDS).
+fn gaussian_id(g: u32) -> f32 {
+    return f32((ids[g / 2u] >> (16u * (g % 2u))) & 0xffffu);
 }
 
 fn cull(g: u32) {
@@ -124,6 +186,18 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
 
     let dir = normalize(mean - cam);
     let color = sh_color(local, frame.sh_degree, rotate_by_conjugate(gin.rotation, dir));
-    // conic.w: the camera-space depth, for the depth pass (rasterize.wgsl, PASSES).
-    projected[local] = Projected(vec4<f32>(px, py, opacity, 0.0), vec4<f32>(conic, tz), vec4<f32>(color, 0.0));
+    // conic.w: the camera-space depth, for the depth pass (rasterize.wgsl, PASSES); with
+    // NORMALS color.w: the least axis turned towards the camera, in camera space (the
+    // shade pass puts the shading normal there instead where the Gaussian has one); with
+    // IDS xy_opacity.w: the Gaussian's id.
+    var id = 0.0;
+    if IDS {
+        id = gaussian_id(g);
+    }
+    var normal = 0.0;
+    if NORMALS {
+        let axis = least_axis(gin.cov_a, gin.cov_b);
+        normal = normal_code(select(axis, -axis, dot(axis, cam - mean) < 0.0) * w);
+    }
+    projected[local] = Projected(vec4<f32>(px, py, opacity, id), vec4<f32>(conic, tz), vec4<f32>(color, normal));
 }

@@ -12,12 +12,16 @@
 // With PASSES (also set there) the same compositing also yields the alpha and depth passes
 // (docs/method.md §7.7): the image's second plane holds the straight (not premultiplied)
 // colour and α = 1 − T, its third the depth Σ w_i z_i / α (+∞ where nothing was drawn).
+// With NORMALS the planes from NORMAL_PLANE hold the normal pass, Σ w_i n_i normalised
+// (x, y, z a plane each; 0 where nothing was drawn); with IDS plane ID_PLANE holds the id
+// of the Gaussian with the largest weight w_i (0 where nothing was drawn).
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> ranges: array<vec2<u32>>;
 @group(0) @binding(2) var<storage, read> tile_values: array<u32>;
-// RGBA8, one u32 per pixel, row-major; with PASSES two more planes of as many words
-// (read back as render::gpu::PassImages): straight RGBA8, then the depth's f32 bits.
+// RGBA8, one u32 per pixel, row-major; with PASSES more planes of as many words (read
+// back as render::gpu::PassImages): straight RGBA8, the depth's f32 bits, then with
+// NORMALS the normal's three f32 planes and with IDS the ids.
 @group(0) @binding(4) var<storage, read_write> image: array<u32>;
 // projected_0 … from binding 8, and projected_at(g), follow (`gpu::pages`).
 
@@ -30,7 +34,8 @@ const BLOCKS_X: u32 = TILE / BLOCK;
 const WORDS: u32 = BATCH / 32u;
 const_assert BLOCK % COLUMN == 0u;
 
-// Batch Gaussian k is the three vectors from 3k (`Splat2D`).
+// Batch Gaussian k is the three vectors from 3k (`Splat2D`). With IDS the first one's w
+// holds the id instead of the reach, which `reach2` then recomputes.
 var<workgroup> batch: array<vec4<f32>, 3 * BATCH>;
 // Bit i of word w of block b: batch Gaussian 32w + i reaches a pixel of block b.
 var<workgroup> block_masks: array<u32, BLOCKS_X * BLOCKS_X * WORDS>;
@@ -57,6 +62,13 @@ struct Quad {
     b: vec4<f32>,
     // Σ w_i z_i, the depth pass's sum (PASSES only)
     d: vec4<f32>,
+    // Σ w_i n_i, the normal pass's sums (NORMALS only)
+    nx: vec4<f32>,
+    ny: vec4<f32>,
+    nz: vec4<f32>,
+    // the largest w_i so far and its Gaussian's id (IDS only)
+    best_w: vec4<f32>,
+    best_id: vec4<f32>,
     live: vec4<bool>,
 }
 
@@ -67,7 +79,7 @@ fn count_true(v: vec4<bool>) -> u32 {
 // One Gaussian blended behind the quad's pixels. Along the invocation's column the
 // exponent −½ Δᵀ Σ'⁻¹ Δ is a quadratic in Δy, p.x + Δy (p.y + p.z Δy), whose coefficients
 // (`column_power`) are computed once per Gaussian for all of the column's pixels.
-fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>, depth: f32) -> Quad {
+fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>, depth: f32, normal: vec3<f32>) -> Quad {
     var q = quad;
     let dy = vec4<f32>(xo.y) - q.centre_y;
     let power = p.x + dy * (p.y + p.z * dy);
@@ -82,6 +94,17 @@ fn blend(quad: Quad, xo: vec4<f32>, p: vec3<f32>, color: vec3<f32>, depth: f32) 
     q.b += color.b * w;
     if PASSES {
         q.d += depth * w;
+    }
+    if NORMALS {
+        q.nx += normal.x * w;
+        q.ny += normal.y * w;
+        q.nz += normal.z * w;
+    }
+    if IDS {
+        // the first (nearest) of equal weights keeps the pixel
+        let larger = w > q.best_w;
+        q.best_w = select(q.best_w, w, larger);
+        q.best_id = select(q.best_id, vec4<f32>(xo.w), larger);
     }
     q.t = select(q.t, next_t, take);
     q.live &= !saturated;
@@ -101,6 +124,15 @@ fn alpha_reach2(opacity: f32) -> f32 {
     return 2.0 * log(opacity / MIN_ALPHA) * 1.001 + 1e-3;
 }
 
+// The batch's squared reach of a Gaussian (its first vector `xo`): kept in xo.w, or with
+// IDS, where xo.w holds the id, computed again.
+fn reach2(xo: vec4<f32>) -> f32 {
+    if IDS {
+        return alpha_reach2(xo.z);
+    }
+    return xo.w;
+}
+
 // Which of the batch's `count` Gaussians reach a pixel centre of each block, a word of
 // the mask per invocation (`block_masks`).
 fn mark_blocks(lid: u32, count: u32, tile_origin: vec2<u32>) {
@@ -115,7 +147,7 @@ fn mark_blocks(lid: u32, count: u32, tile_origin: vec2<u32>) {
         for (var i = 0u; i < n; i++) {
             let xo = batch[3u * (first + i)];
             let conic = batch[3u * (first + i) + 1u].xyz;
-            let reach = ellipse_touches_square(xo.xy, conic, xo.w, lo, f32(BLOCK - 1u));
+            let reach = ellipse_touches_square(xo.xy, conic, reach2(xo), lo, f32(BLOCK - 1u));
             bits |= u32(reach) << i;
         }
         block_masks[j] = bits;
@@ -149,6 +181,19 @@ fn write_passes(pixel: u32, rgb: vec3<f32>, alpha: f32, depth_sum: f32) {
     image[2u * plane + pixel] = depth;
 }
 
+// The normal pass of `pixel` from its sums Σ w_i n_i: their direction, 0 where there is none.
+fn write_normal(pixel: u32, sum: vec3<f32>) {
+    let plane = frame.width * frame.height;
+    let len2 = dot(sum, sum);
+    var n = vec3<f32>(0.0);
+    if len2 > 0.0 {
+        n = sum * inverseSqrt(len2);
+    }
+    image[NORMAL_PLANE * plane + pixel] = bitcast<u32>(n.x);
+    image[(NORMAL_PLANE + 1u) * plane + pixel] = bitcast<u32>(n.y);
+    image[(NORMAL_PLANE + 2u) * plane + pixel] = bitcast<u32>(n.z);
+}
+
 // Pixels of the invocation still compositing.
 fn live_pixels(quads: array<Quad, QUADS>) -> u32 {
     var n = 0u;
@@ -177,7 +222,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
     for (var q = 0u; q < QUADS; q++) {
         let y = y0 + 4u * q + vec4<u32>(0u, 1u, 2u, 3u);
         let live = (y < vec4<u32>(frame.height)) & vec4<bool>(x < frame.width);
-        quads[q] = Quad(vec4<f32>(y) + 0.5, vec4<f32>(1.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), live);
+        let zero = vec4<f32>(0.0);
+        quads[q] = Quad(vec4<f32>(y) + 0.5, vec4<f32>(1.0), zero, zero, zero, zero, zero, zero, zero, zero, zero, live);
         outside += 4u - count_true(live);
     }
     if outside > 0u {
@@ -195,7 +241,11 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
         let count = min(BATCH, range.y - start);
         for (var i = lid; i < count; i += THREADS) {
             let p = projected_at(tile_values[start + i]);
-            batch[3u * i] = vec4<f32>(p.xy_opacity.xyz, alpha_reach2(p.xy_opacity.z));
+            var fourth = alpha_reach2(p.xy_opacity.z);
+            if IDS {
+                fourth = p.xy_opacity.w;
+            }
+            batch[3u * i] = vec4<f32>(p.xy_opacity.xyz, fourth);
             batch[3u * i + 1u] = p.conic;
             batch[3u * i + 2u] = p.color;
         }
@@ -219,9 +269,13 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 let xo = splat.xy_opacity;
                 let p = column_power(xo, splat.conic, centre_x);
                 let color = splat.color.rgb;
+                var normal = vec3<f32>(0.0);
+                if NORMALS {
+                    normal = normal_from_code(splat.color.w);
+                }
                 live = false;
                 for (var q = 0u; q < QUADS; q++) {
-                    quads[q] = blend(quads[q], xo, p, color, splat.conic.w);
+                    quads[q] = blend(quads[q], xo, p, color, splat.conic.w, normal);
                     live = live || any(quads[q].live);
                 }
             }
@@ -242,6 +296,12 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) 
                 image[pixel] = pack4x8unorm(vec4<f32>(clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
                 if PASSES {
                     write_passes(pixel, rgb, 1.0 - quad.t[j], quad.d[j]);
+                }
+                if NORMALS {
+                    write_normal(pixel, vec3<f32>(quad.nx[j], quad.ny[j], quad.nz[j]));
+                }
+                if IDS {
+                    image[ID_PLANE * frame.width * frame.height + pixel] = u32(quad.best_id[j]);
                 }
             }
         }

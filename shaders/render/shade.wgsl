@@ -3,7 +3,8 @@
 // weighted by its visibility T, sampled trilinearly from the transmittance volume where
 // `shadow_lookup` says (the voxels shadow_mark.wgsl asked shadow_transmit.wgsl for).
 // Gaussians without a normal keep c0 under the ambient term only. Mirrors
-// `relight::blinn_phong` and `relight::shadow::ShadowVolume::visibility`.
+// `relight::blinn_phong` and `relight::shadow::ShadowVolume::visibility`. The shading
+// normal is also what the normal pass shows (docs/method.md §7.7).
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 @group(0) @binding(1) var<storage, read> lights: Lights;
@@ -46,6 +47,9 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
     let m = materials[s.y];
     var n = oct_decode(s.x);
     let c0 = projected[g].color.xyz;
+    // The normal pass's normal (color.w, `normal_code`): the shading normal turned towards
+    // the camera, in camera space, where the Gaussian has one; else what projection left.
+    var code = projected[g].color.w;
     var out = m.ambient * c0 * lights.ambient.xyz;
     if any(n != vec3<f32>(0.0)) {
         let v = normalize(frame.camera_near.xyz - p);
@@ -54,6 +58,8 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             out += light_term(c0, p, n, v, m, lights.position[i].xyz, lights.radiance[i].xyz,
                               visibility(i, p, n));
         }
+        let w = mat3x3<f32>(frame.view_row0.xyz, frame.view_row1.xyz, frame.view_row2.xyz);
+        code = normal_code(n * w);
     }
-    projected[g].color = vec4<f32>(out, 0.0);
+    projected[g].color = vec4<f32>(out, code);
 }

@@ -88,6 +88,9 @@ pub struct Settings {
     pub export_glb: Option<PathBuf>,
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub export_particles: Option<PathBuf>,
+    /// The id pass's table (`--passes id`): what each id of `id/frame_N.png` shows.
+    #[serde(skip_serializing_if = "Vec::is_empty", default)]
+    pub ids: Vec<crate::output::passes::IdEntry>,
 }
 
 /// A farm task's chunk: `size` frames a chunk, the task's 0-based `index`, and where that

@@ -97,6 +97,10 @@ pub enum Pixels {
     Rgba(Vec<u8>),
     /// The depth pass: an OpenEXR of one float channel.
     Depth(Vec<f32>),
+    /// The normal pass: an OpenEXR of three float channels.
+    Normal(Vec<[f32; 3]>),
+    /// The id pass: a 16-bit grey PNG.
+    Id(Vec<u16>),
 }
 
 /// Encode and write a job, atomically.
@@ -105,6 +109,16 @@ fn write_job(job: &Job) -> Result<(), OutputError> {
     let encoded = match &job.pixels {
         Pixels::Frame(rgba) => return write_png(path, w, h, rgba),
         Pixels::Rgba(rgba) => passes::encode_rgba_png(w, h, rgba),
+        Pixels::Id(ids) => passes::encode_id_png(w, h, ids),
+        Pixels::Normal(normals) => {
+            let bytes = passes::encode_normal_exr(w, h, normals).map_err(|source| {
+                OutputError::EncodeExr {
+                    path: path.clone(),
+                    source,
+                }
+            })?;
+            return write_atomically(path, &bytes);
+        }
         Pixels::Depth(depth) => {
             let bytes =
                 passes::encode_depth_exr(w, h, depth).map_err(|source| OutputError::EncodeExr {

@@ -7,7 +7,7 @@ use glam::{Mat3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::gpu::layout::{FOV_CLAMP, TILE};
-use super::gpu::PassImages;
+use super::gpu::{PassImages, PassSet};
 use super::splats::mat3_from_sym3;
 use super::{Camera, Splats};
 use crate::splat::sh;
@@ -22,6 +22,9 @@ pub struct ProjectedGaussian {
     pub conic: Vec3,
     pub opacity: f32,
     pub color: Vec3,
+    /// The normal pass's normal: the axis of least extent turned towards the camera, in
+    /// camera space, quantised as the GPU's (`normal_code`); zero where there is none.
+    pub normal: Vec3,
     /// Tile rectangle [min, max).
     pub tile_min: (u32, u32),
     pub tile_max: (u32, u32),
@@ -130,6 +133,12 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
         &splats.sh[i * stride..(i + 1) * stride],
         local,
     );
+    let axis = least_axis(splats.covariances[i]);
+    let facing = if axis.dot(camera.position - mean) < 0.0 {
+        -axis
+    } else {
+        axis
+    };
     Some(ProjectedGaussian {
         index: i,
         depth: tz,
@@ -137,23 +146,85 @@ pub fn project_gaussian(splats: &Splats, i: usize, camera: &Camera) -> Option<Pr
         conic,
         opacity,
         color,
+        normal: normal_from_code(normal_code(w * facing)),
         tile_min: (rmin.x as u32, rmin.y as u32),
         tile_max: (rmax.x as u32, rmax.y as u32),
     })
 }
 
-/// Render to RGBA8 (alpha 255), row-major.
-pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
-    render_with_passes(splats, camera, background, false).0
+/// How far apart, as a share of the trace, the two smallest eigenvalues of a covariance
+/// must lie for [`least_axis`] to name an axis (the GPU's too): closer, the Gaussian is a
+/// sphere or a needle, and no axis stands out.
+pub const LEAST_AXIS_GAP: f64 = 0.01;
+
+/// The axis of least extent of a covariance (the eigenvector of its smallest eigenvalue,
+/// by Jacobi rotations: `project.wgsl` solves the cubic instead), the normal of a flat
+/// Gaussian; zero where no axis stands out ([`LEAST_AXIS_GAP`]).
+pub fn least_axis(cov: super::splats::Sym3) -> Vec3 {
+    let sigma = mat3_from_sym3(cov);
+    let trace = sigma.x_axis.x + sigma.y_axis.y + sigma.z_axis.z;
+    if trace.is_nan() || trace <= 0.0 || !trace.is_finite() {
+        return Vec3::ZERO;
+    }
+    let (lambda, v) = crate::sim::svd::symmetric_eigen(sigma.as_dmat3() / f64::from(trace));
+    // λ sorted descending: the last two are the smallest.
+    if lambda.y - lambda.z < LEAST_AXIS_GAP {
+        return Vec3::ZERO;
+    }
+    v.z_axis.as_vec3().normalize()
 }
 
-/// [`render`], and with `passes` the alpha and depth passes of the same compositing (as the
-/// GPU rasteriser's, `shaders/render/rasterize.wgsl`).
+/// A unit normal as a whole number an f32 holds exactly: the octahedral map onto [−1, 1]²,
+/// 12 bits a coordinate, 1 + u·4096 + v; 0 for a zero or non-finite vector. The GPU packs
+/// the normal pass's normals so (`normal_code` in `shaders/common.wgsl`).
+pub fn normal_code(n: Vec3) -> f32 {
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    if l1.is_nan() || l1 <= 0.0 || !l1.is_finite() {
+        return 0.0;
+    }
+    let mut e = Vec2::new(n.x, n.y) / l1;
+    if n.z < 0.0 {
+        let sgn = Vec2::new(
+            if e.x >= 0.0 { 1.0 } else { -1.0 },
+            if e.y >= 0.0 { 1.0 } else { -1.0 },
+        );
+        e = (Vec2::ONE - Vec2::new(e.y.abs(), e.x.abs())) * sgn;
+    }
+    let q = ((e.clamp(Vec2::NEG_ONE, Vec2::ONE) * 0.5 + 0.5) * 4095.0 + 0.5).floor();
+    1.0 + q.x * 4096.0 + q.y
+}
+
+/// The unit normal of a [`normal_code`]; zero for 0.
+pub fn normal_from_code(code: f32) -> Vec3 {
+    if code < 1.0 {
+        return Vec3::ZERO;
+    }
+    let c = code as u32 - 1;
+    let e = Vec2::new((c / 4096) as f32, (c % 4096) as f32) / 4095.0 * 2.0 - 1.0;
+    let z = 1.0 - e.x.abs() - e.y.abs();
+    let t = (-z).max(0.0);
+    let sgn = Vec2::new(
+        if e.x >= 0.0 { 1.0 } else { -1.0 },
+        if e.y >= 0.0 { 1.0 } else { -1.0 },
+    );
+    let xy = e - sgn * t;
+    Vec3::new(xy.x, xy.y, z).normalize()
+}
+
+/// Render to RGBA8 (alpha 255), row-major.
+pub fn render(splats: &Splats, camera: &Camera, background: Vec3) -> Vec<u8> {
+    render_with_passes(splats, camera, background, PassSet::default(), &[]).0
+}
+
+/// [`render`], and the `passes` of the same compositing (as the GPU rasteriser's,
+/// `shaders/render/rasterize.wgsl`); `ids` holds each Gaussian's id for the id pass (empty:
+/// all 0).
 pub fn render_with_passes(
     splats: &Splats,
     camera: &Camera,
     background: Vec3,
-    passes: bool,
+    passes: PassSet,
+    ids: &[u16],
 ) -> (Vec<u8>, Option<PassImages>) {
     let list = sorted_projections(splats, camera);
     let (w, h) = (camera.width, camera.height);
@@ -168,7 +239,13 @@ pub fn render_with_passes(
             [to_u8(c.x), to_u8(c.y), to_u8(c.z), 255]
         })
         .collect();
-    let passes = passes.then(|| PassImages {
+    let id_of = |p: &Composite| p.best.map_or(0, |i| ids.get(i).copied().unwrap_or(0));
+    let set = passes;
+    let passes = set.any().then(|| PassImages {
+        normal: set
+            .normal
+            .then(|| pixels.iter().map(|p| p.normal().to_array()).collect()),
+        id: set.id.then(|| pixels.iter().map(id_of).collect()),
         alpha: pixels
             .iter()
             .flat_map(|p| {
@@ -182,12 +259,15 @@ pub fn render_with_passes(
 }
 
 /// What front-to-back compositing leaves at a pixel: the premultiplied colour sum Σ w_i c_i,
-/// the transmittance T and the depth sum Σ w_i z_i (w_i = α_i T_i).
+/// the transmittance T, the depth sum Σ w_i z_i and normal sum Σ w_i n_i (w_i = α_i T_i),
+/// and the Gaussian with the largest w_i (the first of equals).
 #[derive(Clone, Copy, Debug)]
 pub struct Composite {
     pub sum: Vec3,
     pub t: f32,
     pub depth_sum: f32,
+    pub normal_sum: Vec3,
+    pub best: Option<usize>,
 }
 
 impl Composite {
@@ -216,6 +296,11 @@ impl Composite {
             ((levels - (1.0 - a8) * background) / a8).clamp(Vec3::ZERO, Vec3::ONE),
             a,
         )
+    }
+
+    /// The direction of Σ w_i n_i, zero where there is none.
+    pub fn normal(&self) -> Vec3 {
+        self.normal_sum.normalize_or_zero()
     }
 
     /// The alpha-weighted mean depth Σ w_i z_i / α, +∞ where α = 0.
@@ -258,6 +343,8 @@ pub fn composite_pixel(list: &[ProjectedGaussian], x: u32, y: u32) -> Composite 
     let mut t = 1.0f32;
     let mut rgb = Vec3::ZERO;
     let mut depth_sum = 0.0f32;
+    let mut normal_sum = Vec3::ZERO;
+    let (mut best, mut best_w) = (None, 0.0f32);
     for g in list {
         if tx < g.tile_min.0 || tx >= g.tile_max.0 || ty < g.tile_min.1 || ty >= g.tile_max.1 {
             continue;
@@ -279,14 +366,21 @@ pub fn composite_pixel(list: &[ProjectedGaussian], x: u32, y: u32) -> Composite 
         if next_t < 1e-4 {
             break;
         }
-        rgb += g.color * (alpha * t);
-        depth_sum += g.depth * (alpha * t);
+        let w = alpha * t;
+        rgb += g.color * w;
+        depth_sum += g.depth * w;
+        normal_sum += g.normal * w;
+        if w > best_w {
+            (best, best_w) = (Some(g.index), w);
+        }
         t = next_t;
     }
     Composite {
         sum: rgb,
         t,
         depth_sum,
+        normal_sum,
+        best,
     }
 }
 

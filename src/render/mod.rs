@@ -6,5 +6,5 @@ pub mod gpu;
 pub mod splats;
 
 pub use camera::Camera;
-pub use gpu::{GpuRenderer, PassImages, RenderedImage};
+pub use gpu::{GpuRenderer, PassImages, PassSet, RenderedImage};
 pub use splats::Splats;

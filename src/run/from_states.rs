@@ -4,7 +4,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 use glam::Vec3;
 
 use super::{check_manifest_for_resume, create_dir, Event, Job, Sink, Summary};
@@ -13,6 +13,7 @@ use crate::gpu::GpuContext;
 use crate::limits;
 use crate::output::frame_path;
 use crate::output::manifest::{manifest_path, FrameTiming, Settings};
+use crate::output::passes::Pass;
 use crate::render::{GpuRenderer, Splats};
 
 pub(super) fn execute(
@@ -24,6 +25,9 @@ pub(super) fn execute(
     let scene = &job.scene;
     // The scene's settings only: its objects come from the states.
     let hash = checkpoint::scene_hash(scene, &Splats::default(), None);
+    if job.opts.passes.contains(&Pass::Id) {
+        bail!("--passes id: frames rendered --from-states carry no objects to number; render the scene itself for the id pass");
+    }
     let dir = scene.output_dir();
     create_dir(&dir, "output directory")?;
     for pass in &job.opts.passes {
@@ -60,7 +64,7 @@ pub(super) fn execute(
         states,
         renderer: {
             let mut r = GpuRenderer::new(gpu);
-            r.set_passes(gpu, !job.opts.passes.is_empty());
+            r.set_passes(gpu, Pass::set(&job.opts.passes));
             r
         },
         sink: Sink::new(dir, &job.opts.passes, manifest),

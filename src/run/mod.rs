@@ -562,6 +562,8 @@ impl Sink {
                 let pixels = match pass {
                     Pass::Alpha => Pixels::Rgba(p.alpha.clone()),
                     Pass::Depth => Pixels::Depth(p.depth.clone()),
+                    Pass::Normal => Pixels::Normal(p.normal.clone().unwrap_or_default()),
+                    Pass::Id => Pixels::Id(p.id.clone().unwrap_or_default()),
                 };
                 self.writer.submit_pixels(file, w, h, pixels)?;
             }

@@ -13,6 +13,7 @@ use crate::derive::{Derive, RigidDerive};
 use crate::gpu::GpuContext;
 use crate::limits;
 use crate::output::manifest::{manifest_path, FrameTiming, Settings};
+use crate::output::passes::{IdTable, Pass};
 use crate::render::{GpuRenderer, Splats};
 use crate::scene::kinematic::KinematicObject;
 use crate::scene::lighting::SceneLighting;
@@ -53,8 +54,15 @@ pub(super) fn execute(
     let resume_from = resume_state(&job, setup.as_ref(), &dir, hash, first_missing, on_event)?;
     note_scene(&job, splats.len(), &dir, on_event);
     let mut renderer = GpuRenderer::new(gpu);
-    renderer.set_passes(gpu, !opts.passes.is_empty());
+    renderer.set_passes(gpu, Pass::set(&opts.passes));
     renderer.upload(gpu, &splats)?;
+    let ids = opts
+        .passes
+        .contains(&Pass::Id)
+        .then(|| id_table(&splats, &report, setup.as_ref()));
+    if let Some(t) = &ids {
+        renderer.set_ids(gpu, &t.ids)?;
+    }
     let lighting = prepare_lighting(
         &job,
         (&splats, &report),
@@ -76,12 +84,13 @@ pub(super) fn execute(
         (Some(l), Some(s)) => recomputed_normals(l, s, &splats, (gpu, &renderer))?,
         _ => None,
     };
-    let settings = manifest_settings(
+    let mut settings = manifest_settings(
         &job,
         setup.as_ref(),
         (p2g, splats.len()),
         resume_from.as_ref(),
     );
+    settings.ids = ids.map(|t| t.entries).unwrap_or_default();
     let mut manifest = job.manifest(manifest_file, hash, gpu, settings);
     manifest.write_now()?;
     let fragment_log = opts
@@ -424,4 +433,28 @@ impl Frames<'_> {
         timing.render_ms = t1.elapsed().as_secs_f64() * 1e3;
         self.sink.submit(frame, image, &timings, timing)
     }
+}
+
+/// The id pass's table: each object's Gaussians (in `splats`' order: as built, or as the
+/// simulation's setup arranged them) by object and region label.
+fn id_table(splats: &Splats, report: &BuildReport, setup: Option<&SimulationSetup>) -> IdTable {
+    let name = |o: usize| report.objects[o].name.clone();
+    let runs: Vec<(String, std::ops::Range<usize>)> = match setup {
+        Some(s) => s
+            .parts
+            .iter()
+            .map(|p| (name(p.object), p.start..p.start + p.len))
+            .collect(),
+        None => {
+            let mut start = 0;
+            (0..report.objects.len())
+                .map(|o| {
+                    let run = start..start + report.objects[o].gaussians;
+                    start = run.end;
+                    (name(o), run)
+                })
+                .collect()
+        }
+    };
+    IdTable::new(&runs, splats)
 }

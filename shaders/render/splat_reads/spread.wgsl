@@ -11,13 +11,18 @@ fn read_splat(k: u32, lid: u32) -> Splat2D {
     let lane = lid & 7u;
     let first = batch[3u * k + (lane >> 2u)][lane & 3u];
     let color = batch[3u * k + 2u][lane & 3u];
+    // the colour's w (the normal pass's normal) only where the normal pass reads it
+    var color_w = 0.0;
+    if NORMALS {
+        color_w = subgroupBroadcast(color, 3u);
+    }
     return Splat2D(
         vec4<f32>(subgroupBroadcast(first, 0u), subgroupBroadcast(first, 1u),
                   subgroupBroadcast(first, 2u), subgroupBroadcast(first, 3u)),
         vec4<f32>(subgroupBroadcast(first, 4u), subgroupBroadcast(first, 5u),
                   subgroupBroadcast(first, 6u), subgroupBroadcast(first, 7u)),
         vec4<f32>(subgroupBroadcast(color, 0u), subgroupBroadcast(color, 1u),
-                  subgroupBroadcast(color, 2u), 0.0),
+                  subgroupBroadcast(color, 2u), color_w),
     );
 }
 

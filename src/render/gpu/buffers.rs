@@ -16,8 +16,8 @@ impl GpuRenderer {
                 return Ok(());
             }
         }
-        // The colour, and with the passes the alpha and depth planes (rasterize.wgsl).
-        let planes = if self.passes { 3 } else { 1 };
+        // The colour, and the passes' planes (rasterize.wgsl).
+        let planes = u64::from(self.passes.planes());
         let image_bytes = u64::from(width) * u64::from(height) * 4 * planes;
         if image_bytes > gpu.max_binding() {
             return Err(GpuError::TooLarge {

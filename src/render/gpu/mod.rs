@@ -154,6 +154,13 @@ pub struct PassImages {
     /// The alpha-weighted mean camera-space depth of the Gaussians' centres, Σ w_i z_i / α
     /// (w_i = α_i T_i, each Gaussian's share of the pixel), +∞ where α = 0.
     pub depth: Vec<f32>,
+    /// The normal pass, when asked for: the direction of Σ w_i n_i, n_i each Gaussian's
+    /// camera-space normal turned towards the camera (its shading normal when lit, else its
+    /// axis of least extent), (0, 0, 0) where there is none.
+    pub normal: Option<Vec<[f32; 3]>>,
+    /// The id pass, when asked for: the id of the Gaussian with the largest w_i (the first
+    /// of equals), 0 where nothing was drawn.
+    pub id: Option<Vec<u16>>,
 }
 
 /// Wall-clock timings of one frame, in milliseconds.
@@ -181,6 +188,8 @@ pub(crate) struct SplatBuffers {
     depth_order_alt: wgpu::Buffer,
     offsets: wgpu::Buffer,
     depth_count: wgpu::Buffer,
+    /// The id pass's ids, two 16-bit ids a word ([`GpuRenderer::set_ids`]).
+    ids: wgpu::Buffer,
     /// How the per-Gaussian records split into pages (`gpu::pages`): the Gaussians, SH and
     /// projections are projected page by page and read back from every page.
     pages: PageRanges,
@@ -224,8 +233,52 @@ pub struct GpuRenderer {
     lighting: Option<Lighting>,
     /// The workgroup shapes the sort and the rasteriser were built for.
     executor: Executor,
-    /// Whether frames also carry the alpha and depth passes ([`PassImages`]).
-    passes: bool,
+    /// The passes frames carry beside the colour ([`PassImages`]).
+    passes: PassSet,
+}
+
+/// Which passes a frame carries beside its colour (docs/method.md §7.7). Alpha and depth
+/// come whenever any pass is on (one accumulator more than the colour); the normal and id
+/// passes each add theirs only when asked for.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PassSet {
+    pub alpha_depth: bool,
+    pub normal: bool,
+    pub id: bool,
+}
+
+impl PassSet {
+    /// The image plane where the normal pass's three planes start.
+    pub const NORMAL_PLANE: u32 = 3;
+
+    /// Alpha and depth only.
+    pub const ALPHA_DEPTH: PassSet = PassSet {
+        alpha_depth: true,
+        normal: false,
+        id: false,
+    };
+
+    /// Every pass.
+    pub const ALL: PassSet = PassSet {
+        alpha_depth: true,
+        normal: true,
+        id: true,
+    };
+
+    pub fn any(self) -> bool {
+        self.alpha_depth || self.normal || self.id
+    }
+
+    /// The image's planes of one u32 a pixel: the colour; with any pass the straight RGBA
+    /// and the depth; the normal's x, y, z; the id.
+    pub fn planes(self) -> u32 {
+        1 + 2 * u32::from(self.any()) + 3 * u32::from(self.normal) + u32::from(self.id)
+    }
+
+    /// The image plane of the id pass.
+    pub fn id_plane(self) -> u32 {
+        Self::NORMAL_PLANE + 3 * u32::from(self.normal)
+    }
 }
 
 #[derive(Default)]
@@ -282,7 +335,7 @@ impl GpuRenderer {
         let sort = Arc::new(RadixSort::new(device, executor));
         let scan = Arc::new(Scan::new(device));
         GpuRenderer {
-            project: passes::Project::new(device),
+            project: passes::Project::new(device, PassSet::default()),
             depth_sort: passes::DepthSort {
                 sort: sort.clone(),
                 scan: scan.clone(),
@@ -290,7 +343,7 @@ impl GpuRenderer {
             tile_keys: passes::TileKeys::new(device, 1, scan.clone()),
             tile_sort: passes::TileSort { sort, scan },
             tile_ranges: passes::TileRanges(Ranges::new(device)),
-            rasterize: passes::Rasterize::new(gpu, 1, executor, false),
+            rasterize: passes::Rasterize::new(gpu, 1, executor, PassSet::default()),
             frame: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("frame"),
                 size: std::mem::size_of::<Frame>() as u64,
@@ -312,19 +365,20 @@ impl GpuRenderer {
             profile: false,
             lighting: None,
             executor,
-            passes: false,
+            passes: PassSet::default(),
         }
     }
 
-    /// Render the alpha and depth passes with every frame from now on (or stop): the
-    /// rasteriser writes them beside the colour from the same compositing.
-    pub fn set_passes(&mut self, gpu: &GpuContext, on: bool) {
-        if on == self.passes {
+    /// Render these passes with every frame from now on (none: stop): the rasteriser
+    /// writes them beside the colour from the same compositing.
+    pub fn set_passes(&mut self, gpu: &GpuContext, passes: PassSet) {
+        if passes == self.passes {
             return;
         }
-        self.passes = on;
+        self.passes = passes;
         let pages = self.splats.as_ref().map_or(1, |s| s.pages.pages.count);
-        self.rasterize = passes::Rasterize::new(gpu, pages, self.executor, on);
+        self.project = passes::Project::new(&gpu.device, passes);
+        self.rasterize = passes::Rasterize::new(gpu, pages, self.executor, passes);
         self.frame_buffers = None;
         self.bound = None;
     }
@@ -512,10 +566,32 @@ impl GpuRenderer {
         let (mut rgba, stats) = self.read_image(gpu, f)?;
         let readback_ms = start.elapsed().as_secs_f64() * 1e3;
         let plane = (f.width * f.height * 4) as usize;
-        let passes = self.passes.then(|| {
-            let depth = bytemuck::pod_collect_to_vec(&rgba[2 * plane..3 * plane]);
-            let alpha = rgba[plane..2 * plane].to_vec();
-            PassImages { alpha, depth }
+        let set = self.passes;
+        let floats = |k: u32| -> Vec<f32> {
+            let k = k as usize;
+            bytemuck::pod_collect_to_vec(&rgba[k * plane..(k + 1) * plane])
+        };
+        let passes = set.any().then(|| PassImages {
+            alpha: rgba[plane..2 * plane].to_vec(),
+            depth: floats(2),
+            normal: set.normal.then(|| {
+                let (x, y, z) = (
+                    floats(PassSet::NORMAL_PLANE),
+                    floats(PassSet::NORMAL_PLANE + 1),
+                    floats(PassSet::NORMAL_PLANE + 2),
+                );
+                (0..x.len()).map(|i| [x[i], y[i], z[i]]).collect()
+            }),
+            id: set.id.then(|| {
+                let k = set.id_plane() as usize;
+                rgba[k * plane..(k + 1) * plane]
+                    .chunks_exact(4)
+                    .map(|w| {
+                        u16::try_from(u32::from_le_bytes([w[0], w[1], w[2], w[3]]))
+                            .unwrap_or(u16::MAX)
+                    })
+                    .collect()
+            }),
         });
         rgba.truncate(plane);
         Ok((

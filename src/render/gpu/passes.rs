@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use super::{tile_bits, GAUSSIAN_BYTES, PROJECTED_BYTES, SH_BYTES, TILE};
 use super::{FrameExtent, FrameInputs, Render, TilePairs};
-use super::{COMMON, SH};
+use super::{PassSet, COMMON, SH};
 use crate::gpu::pages::{page_var, wgsl_paged_reader};
 use crate::gpu::pass::{Bound, Pass};
 use crate::gpu::ranges::{Ranges, SortedKeys};
@@ -61,8 +61,12 @@ pub struct Project {
 }
 
 impl Project {
-    pub fn new(device: &wgpu::Device) -> Project {
+    /// With `passes.normal`, also each Gaussian's camera-space normal; with `passes.id`,
+    /// its id (`Projected`'s spare floats, common.wgsl).
+    pub fn new(device: &wgpu::Device, passes: PassSet) -> Project {
         let src = Source::new()
+            .define("NORMALS", passes.normal)
+            .define("IDS", passes.id)
             .module(&COMMON)
             .module(&SH)
             .pass(include_str!("../../../shaders/render/project.wgsl"));
@@ -90,6 +94,7 @@ impl Project {
                 ("depth_order", whole(&s.depth_order)),
                 ("stats", whole(at.stats)),
                 ("page", s.pages.entry(i)),
+                ("ids", whole(&s.ids)),
             ],
         )
     }
@@ -390,12 +395,16 @@ impl SplatReads {
 
 impl Rasterize {
     /// For `executor`'s workgroup shape, with the reads that shape allows on `gpu`; with
-    /// `passes`, also the alpha and depth planes of the image.
-    pub fn new(gpu: &GpuContext, pages: u32, executor: Executor, passes: bool) -> Rasterize {
+    /// `passes`, also those planes of the image ([`PassSet::planes`]).
+    pub fn new(gpu: &GpuContext, pages: u32, executor: Executor, passes: PassSet) -> Rasterize {
         let reads = SplatReads::for_adapter(gpu, executor);
         let src = Source::new()
             .define("QUADS", rasterize_quads(executor))
-            .define("PASSES", passes)
+            .define("PASSES", passes.any())
+            .define("NORMALS", passes.normal)
+            .define("IDS", passes.id)
+            .define("NORMAL_PLANE", PassSet::NORMAL_PLANE)
+            .define("ID_PLANE", passes.id_plane())
             .module(&COMMON)
             .generated(reads.source().to_string())
             .generated(projected_reader(pages))

@@ -129,6 +129,8 @@ impl GpuRenderer {
             depth_order_alt: storage(device, "depth order alt", n * 4, usage),
             offsets: storage(device, "tile offsets", n * 4, usage),
             depth_count: storage(device, "depth count", 4, usage),
+            // two 16-bit ids a word, all 0 until set_ids
+            ids: storage(device, "ids", n.div_ceil(2).max(1) * 4, usage),
             pages: PageRanges::new(device, "gaussian pages", pages),
         };
         gpu.queue
@@ -139,6 +141,28 @@ impl GpuRenderer {
             .write_buffer(&b.depth_count, 0, bytemuck::bytes_of(&(n as u32)));
         self.splats = Some(b);
         self.bound = None;
+        Ok(())
+    }
+
+    /// The id pass's id of each uploaded Gaussian (0: none; after [`upload`](Self::upload),
+    /// one per Gaussian), kept until the next upload.
+    pub fn set_ids(&mut self, gpu: &GpuContext, ids: &[u16]) -> Result<(), GpuError> {
+        let Some(s) = &self.splats else {
+            return Err(GpuError::Failed("set_ids before upload".into()));
+        };
+        if ids.len() != s.count as usize {
+            return Err(GpuError::Failed(format!(
+                "the id pass: {} ids for {} uploaded Gaussians",
+                ids.len(),
+                s.count
+            )));
+        }
+        let mut words = vec![0u32; ids.len().div_ceil(2).max(1)];
+        for (i, id) in ids.iter().enumerate() {
+            words[i / 2] |= u32::from(*id) << (16 * (i % 2));
+        }
+        gpu.queue
+            .write_buffer(&s.ids, 0, bytemuck::cast_slice(&words));
         Ok(())
     }
 
