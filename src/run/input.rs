@@ -28,10 +28,31 @@ pub(super) fn check_image_size(opts: &RunOptions) -> Result<()> {
 /// The scene file (or the default scene) with quality and overrides applied, and its
 /// camera path.
 pub(super) fn load_scene(file: Option<&Path>, opts: &RunOptions) -> Result<(Scene, CameraPath)> {
-    let mut scene = match file {
+    let scene = match file {
         Some(path) => scene::load(path)?,
         None => scene::default_scene(),
     };
+    prepare_scene(scene, opts)
+}
+
+/// A scene input ([`Input::Scene`](super::Input::Scene) or a scene's JSON text) as
+/// [`load_scene`] prepares it.
+pub(super) fn load_scene_input(
+    input: &super::Input,
+    opts: &RunOptions,
+) -> Result<(Scene, CameraPath)> {
+    match input {
+        super::Input::Text {
+            text,
+            name,
+            base_dir,
+        } => prepare_scene(scene::parse(text, name, base_dir)?, opts),
+        super::Input::Scene(file) => load_scene(file.as_deref(), opts),
+        _ => bail!("load_scene_input takes a scene file or a scene's text"),
+    }
+}
+
+fn prepare_scene(mut scene: Scene, opts: &RunOptions) -> Result<(Scene, CameraPath)> {
     scene.apply_quality(opts.quality);
     scene.with_overrides(opts.out.clone(), opts.width, opts.height)?;
     let path = scene.camera_path()?;

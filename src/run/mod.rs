@@ -53,6 +53,13 @@ pub enum Input {
         camera: Option<usize>,
         up: Option<String>,
     },
+    /// A scene given as JSON text (the Python package's `Scene.from_dict`): `name` names it
+    /// in messages, relative paths in it resolve against `base_dir`.
+    Text {
+        text: String,
+        name: String,
+        base_dir: PathBuf,
+    },
     /// Render-only: each frame's Gaussians from `dir/frame_NNNNN.ply` (as written by
     /// `--export-ply`); the scene gives the camera path and output settings.
     States {
@@ -226,8 +233,8 @@ impl Run {
                 })?;
                 (scene, path, frames, source)
             }
-            Input::Scene(file) => {
-                let (scene, path) = input::load_scene(file.as_deref(), &opts)?;
+            Input::Scene(_) | Input::Text { .. } => {
+                let (scene, path) = input::load_scene_input(&opts.input, &opts)?;
                 let (frames, idle) = task_frames(&opts, scene.frame_count())?;
                 // A task with nothing to render does not build the scene (captures can
                 // take long to read).
@@ -412,6 +419,7 @@ impl Job {
             Input::Scene(Some(p)) | Input::States { scene: Some(p), .. } => p.display().to_string(),
             Input::Ply { file, .. } => format!("--ply {}", file.display()),
             Input::Scene(None) | Input::States { scene: None, .. } => "<default scene>".into(),
+            Input::Text { name, .. } => name.clone(),
         }
     }
 

@@ -25,6 +25,7 @@ pub(super) fn prepare_simulation(
     if setup.is_none() {
         let name = match &opts.input {
             crate::run::Input::Scene(Some(p)) => p.display().to_string(),
+            crate::run::Input::Text { name, .. } => name.clone(),
             _ => "the default scene".into(),
         };
         if opts.fragments {
