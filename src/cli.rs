@@ -270,6 +270,11 @@ pub(crate) struct RenderArgs {
     /// order of their names).
     #[arg(long, requires = "cameras")]
     pub(crate) camera: Option<usize>,
+    /// With --cameras of a nerfstudio camera_path.json: the training run's
+    /// dataparser_transforms.json, which maps the path from nerfstudio's normalised world
+    /// back into the capture's frame (as nerfstudio's own exporter does).
+    #[arg(long, requires = "cameras", value_name = "FILE")]
+    pub(crate) dataparser: Option<PathBuf>,
     /// With --ply: which way is up in the capture (an axis: +x, -x, +y, -y, +z, -z), instead
     /// of the estimate (docs/captures.md, The up axis).
     #[arg(
@@ -333,6 +338,7 @@ impl RenderArgs {
             (None, Some(file)) => Input::Ply {
                 file,
                 cameras: self.cameras,
+                dataparser: self.dataparser,
                 camera: self.camera,
                 up: self.up,
             },

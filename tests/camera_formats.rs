@@ -195,6 +195,50 @@ fn exported_cameras_read_back_give_the_same_frames() {
     }
 }
 
+/// The quick look (`render --ply --cameras FILE --camera I`) through the nerfstudio
+/// `camera_path.json` with `--dataparser`: the same view as through the `cameras.json`
+/// (PSNR ≥ 40 dB); without the dataparser the path stays in nerfstudio's normalised world
+/// and the view is another (below 20 dB).
+#[test]
+fn the_quick_look_takes_a_camera_path_with_its_dataparser() {
+    let dir = tempfile::tempdir().unwrap();
+    let gpu = splatter::gpu::GpuContext::new(None).expect("a wgpu adapter");
+    let look = |name: &str, cameras: &str, dataparser: Option<&str>| {
+        let out = dir.path().join(name);
+        let run = Run::prepare(RunOptions {
+            input: Input::Ply {
+                file: data("plant_14k.spz"),
+                cameras: Some(data(cameras)),
+                dataparser: dataparser.map(data),
+                camera: Some(2),
+                up: None,
+            },
+            out: Some(out.clone()),
+            width: Some(192),
+            height: Some(108),
+            deterministic: true,
+            ..RunOptions::default()
+        })
+        .unwrap();
+        run.execute(&gpu, &mut |_| {}).unwrap();
+        rgba(&std::fs::read(out.join("frame_00000.png")).unwrap())
+    };
+    let reference = look("inria", "plant_cameras.json", None);
+    let path = "plant_formats/camera_path.json";
+    let mapped = cpu::psnr(
+        &look(
+            "mapped",
+            path,
+            Some("plant_formats/dataparser_transforms.json"),
+        ),
+        &reference,
+    );
+    let unmapped = cpu::psnr(&look("unmapped", path, None), &reference);
+    eprintln!("camera 2: {mapped:.1} dB with the dataparser, {unmapped:.1} dB without");
+    assert!(mapped >= 40.0, "{mapped:.1} dB");
+    assert!(unmapped < 20.0, "{unmapped:.1} dB");
+}
+
 /// Bad camera files are refused with their file, field and value.
 #[test]
 fn bad_camera_files_are_named() {

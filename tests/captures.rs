@@ -92,6 +92,7 @@ fn quick_look(file: &str) -> Run {
         input: Input::Ply {
             file: data(file),
             cameras: None,
+            dataparser: None,
             camera: None,
             up: None,
         },
@@ -379,6 +380,7 @@ fn quick_look_from_a_training_camera_draws_the_capture_in_its_own_frame() {
         input: Input::Ply {
             file: data(PLANT),
             cameras: Some(cameras),
+            dataparser: None,
             camera: Some(0),
             up: None,
         },
@@ -542,6 +544,7 @@ fn quick_look_at(dir: &Path, flipped: bool, cameras: bool, up: Option<&str>) -> 
         input: Input::Ply {
             file,
             cameras: None,
+            dataparser: None,
             camera: None,
             up: up.map(str::to_string),
         },
@@ -645,6 +648,7 @@ fn quick_look_stands_a_glb_on_gltf_s_up() {
         input: Input::Ply {
             file,
             cameras: None,
+            dataparser: None,
             camera: None,
             up: None,
         },

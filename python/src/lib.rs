@@ -249,12 +249,12 @@ fn check_scene(text: &str, origin: &str, base_dir: PathBuf) -> PyResult<String> 
     Ok(scene.name)
 }
 
-/// Run a scene as `splatter render` does, into `out`: each frame's PNG, and with
-/// `export_ply` / `export_particles` its Gaussians (`out/gaussians/`) and particles
-/// (`out/particles/`). `on_frame(frame)` is called as each frame is rendered (its PNG is
+/// Run a scene as `splatter render` does, into `out`: each frame's PNG, with `alpha` its
+/// alpha pass (`out/alpha/`), and with `export_ply` / `export_particles` its Gaussians
+/// (`out/gaussians/`) and particles (`out/particles/`). `on_frame(frame)` is called as each frame is rendered (its PNG is
 /// then being written); returns the frames rendered.
 #[pyfunction]
-#[pyo3(signature = (path, text, origin, base_dir, out, frames, deterministic, backend_name, width, height, export_ply, export_particles, on_frame))]
+#[pyo3(signature = (path, text, origin, base_dir, out, frames, deterministic, backend_name, width, height, alpha, export_ply, export_particles, on_frame))]
 #[allow(clippy::too_many_arguments)]
 fn run_scene(
     py: Python<'_>,
@@ -268,6 +268,7 @@ fn run_scene(
     backend_name: Option<String>,
     width: Option<u32>,
     height: Option<u32>,
+    alpha: bool,
     export_ply: bool,
     export_particles: bool,
     on_frame: Py<PyAny>,
@@ -290,6 +291,11 @@ fn run_scene(
         deterministic,
         export_ply: export_ply.then(|| out.join("gaussians")),
         export_particles: export_particles.then(|| out.join("particles")),
+        passes: if alpha {
+            vec![splatter::output::passes::Pass::Alpha]
+        } else {
+            Vec::new()
+        },
         ..RunOptions::default()
     };
     let run = Run::prepare(opts).map_err(run_error)?;
@@ -413,14 +419,22 @@ fn quick_look_camera(cloud: &GaussianCloud, width: u32, height: u32) -> PyResult
     Ok(path.camera(0))
 }
 
-/// A PNG frame as an (height, width, 3) uint8 array.
+/// A PNG frame as an (height, width, 3) uint8 array, or (height, width, 4) with `rgba`.
 #[pyfunction]
-fn read_frame<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyArray3<u8>>> {
-    let image = image::open(&path)
-        .map_err(|e| os_error(format!("{}: {e}", path.display())))?
-        .to_rgb8();
-    let (w, h) = image.dimensions();
-    Array3::from_shape_vec((h as usize, w as usize, 3), image.into_raw())
+#[pyo3(signature = (path, rgba=false))]
+fn read_frame<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    rgba: bool,
+) -> PyResult<Bound<'py, PyArray3<u8>>> {
+    let image = image::open(&path).map_err(|e| os_error(format!("{}: {e}", path.display())))?;
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    let (channels, bytes) = if rgba {
+        (4, image.to_rgba8().into_raw())
+    } else {
+        (3, image.to_rgb8().into_raw())
+    };
+    Array3::from_shape_vec((h, w, channels), bytes)
         .map(|a| a.into_pyarray(py))
         .map_err(|e| PyValueError::new_err(e.to_string()))
 }

@@ -130,6 +130,16 @@ def test_a_frame_of_run_is_the_clis_frame(tmp_path):
         assert f.positions is not None and f.positions.shape[1] == 3
     # the jelly falls: its particles move between the first and the last frame
     assert np.abs(frames[-1].positions - frames[0].positions).max() > 1e-3
+    # with the alpha pass the images are RGBA, and over the background they are the frames
+    bg = np.array(splatter.Scene.load(scene).to_dict()["output"].get("background", [0, 0, 0]))
+    for f in splatter.run(scene, frames="0..2", deterministic=True, width=96, height=72,
+                          alpha=True, progress=False):
+        assert f.image.shape == (72, 96, 4)
+        assert (f.image[..., 3] == 0).any() and (f.image[..., 3] == 255).any()
+        a = f.image[..., 3:] / 255.0
+        over = f.image[..., :3] / 255.0 * a + bg * (1 - a)
+        frame = frames[f.index].image / 255.0
+        assert np.abs(over - frame).max() <= 1.0 / 255 + 1e-6
 
 
 def test_render_frames_a_capture_and_takes_a_camera():

@@ -86,7 +86,7 @@ pub(super) fn build_splats(scene: &Scene) -> Result<(Splats, BuildReport)> {
 pub(super) fn quick_look(
     opts: &RunOptions,
     ply: &Path,
-    cameras: Option<&Path>,
+    (cameras, dataparser): (Option<&Path>, Option<&Path>),
     camera: Option<usize>,
     up: Option<&str>,
 ) -> Result<(Scene, CameraPath, Splats, BuildReport)> {
@@ -117,7 +117,8 @@ pub(super) fn quick_look(
     let (splats, report) = build_splats(&scene)?;
     let path = match cameras {
         Some(file) => {
-            let (cameras, warnings) = scene::from_camera_file(file, opts.width, opts.height)?;
+            let (cameras, warnings) =
+                scene::from_camera_file(file, dataparser, opts.width, opts.height)?;
             for w in warnings {
                 log::warn!("{w}");
             }

@@ -50,6 +50,9 @@ pub enum Input {
     Ply {
         file: PathBuf,
         cameras: Option<PathBuf>,
+        /// A nerfstudio training run's `dataparser_transforms.json`, mapping a
+        /// `camera_path.json` in `cameras` back into the capture's frame.
+        dataparser: Option<PathBuf>,
         camera: Option<usize>,
         up: Option<String>,
     },
@@ -247,11 +250,17 @@ impl Run {
             Input::Ply {
                 file,
                 cameras,
+                dataparser,
                 camera,
                 up,
             } => {
-                let (scene, path, splats, report) =
-                    input::quick_look(&opts, file, cameras.as_deref(), *camera, up.as_deref())?;
+                let (scene, path, splats, report) = input::quick_look(
+                    &opts,
+                    file,
+                    (cameras.as_deref(), dataparser.as_deref()),
+                    *camera,
+                    up.as_deref(),
+                )?;
                 let (frames, idle) = task_frames(&opts, scene.frame_count())?;
                 let source = unless_idle(idle, || Ok(Source::Built { splats, report }))?;
                 (scene, path, frames, source)

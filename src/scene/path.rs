@@ -334,10 +334,11 @@ pub fn from_cameras_json(
 /// told by its content), with what the reader warned of.
 pub fn from_camera_file(
     path: &Path,
+    dataparser: Option<&Path>,
     width: Option<u32>,
     height: Option<u32>,
 ) -> Result<(Vec<Camera>, Vec<String>), SceneError> {
-    let file = cameras::read_any(path)?;
+    let file = cameras::read(path, cameras::CameraFormat::of(path)?, dataparser)?;
     let cams = cameras::at_size(&path.display().to_string(), &file.cameras, width, height)?;
     Ok((cams, file.warnings))
 }

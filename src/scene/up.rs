@@ -56,7 +56,7 @@ pub fn inspect_capture(
     };
     let read = file
         .as_deref()
-        .map(|f| super::from_camera_file(f, None, None).map(|(c, _)| c));
+        .map(|f| super::from_camera_file(f, None, None, None).map(|(c, _)| c));
     let (cameras, ignored) = match read {
         None => (None, None),
         Some(Ok(c)) => (Some(c), None),

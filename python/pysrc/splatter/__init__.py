@@ -154,7 +154,8 @@ class Scene:
 
 @dataclass
 class Frame:
-    """One rendered frame: ``index``, ``image`` (height, width, 3) uint8, and when asked
+    """One rendered frame: ``index``, ``image`` (height, width, 3) uint8 (×4 with the alpha
+    pass), ``path`` (its PNG), and when asked
     for, its Gaussians ``splats`` and its particles' ``positions`` (m, 3) and ``damage``
     (m,; None for materials without damage)."""
 
@@ -195,6 +196,7 @@ def run(
     height: Optional[int] = None,
     gaussians: bool = False,
     particles: bool = False,
+    alpha: bool = False,
     backend: Optional[str] = None,
     progress: bool = True,
 ) -> Iterator[Frame]:
@@ -203,7 +205,8 @@ def run(
     :class:`Frame` as it is written. ``frames``: a ``range``, one frame, or the CLI's
     syntax (``"0..12"``, ``"1-3,5"``). ``out``: where the frames go (a temporary folder by
     default, removed when the iteration ends). ``gaussians`` / ``particles``: also read each
-    frame's Gaussians / particles back. ``backend``: ``"vulkan"``, ``"gl"``, ``"metal"`` or
+    frame's Gaussians / particles back. ``alpha``: each ``image`` is (height, width, 4),
+    the alpha pass (straight colour and α; over the scene's background it is the frame). ``backend``: ``"vulkan"``, ``"gl"``, ``"metal"`` or
     ``"dx12"`` to force one (default: the adapter the CLI would choose). A progress bar
     shows when ``tqdm`` is installed and ``progress`` is true."""
     if scene is None or isinstance(scene, Scene):
@@ -232,6 +235,7 @@ def run(
                 backend,
                 width,
                 height,
+                alpha,
                 gaussians,
                 particles,
                 done.put,
@@ -251,7 +255,13 @@ def run(
                 break
             png = out_dir / f"frame_{index:05d}.png"
             _wait_for(png, worker)
-            frame = Frame(index=index, image=_native.read_frame(os.fspath(png)), path=png)
+            if alpha:
+                a = out_dir / "alpha" / f"frame_{index:05d}.png"
+                _wait_for(a, worker)
+                image = _native.read_frame(os.fspath(a), True)
+            else:
+                image = _native.read_frame(os.fspath(png))
+            frame = Frame(index=index, image=image, path=png)
             if gaussians:
                 frame.splats = read(out_dir / "gaussians" / f"frame_{index:05d}.ply")
             if particles:

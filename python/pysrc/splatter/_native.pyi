@@ -34,6 +34,7 @@ def run_scene(
     backend_name: Optional[str],
     width: Optional[int],
     height: Optional[int],
+    alpha: bool,
     export_ply: bool,
     export_particles: bool,
     on_frame: Callable[[int], object],
@@ -51,5 +52,5 @@ def render_splats(
     background: Tuple[float, float, float] = (0.0, 0.0, 0.0),
     backend_name: Optional[str] = None,
 ) -> np.ndarray: ...
-def read_frame(path: str) -> np.ndarray: ...
+def read_frame(path: str, rgba: bool = False) -> np.ndarray: ...
 def adapter(backend_name: Optional[str] = None) -> str: ...
