@@ -713,6 +713,24 @@ fn cameras_json_path_with_a_transformed_capture_warns() {
     assert!(warnings(&out).is_empty(), "{}", describe(&out));
 }
 
+/// Channel `name` of an OpenEXR file's first layer, read by the `exr` crate: the layer's
+/// size and the channel's values, row-major.
+fn exr_channel(path: &Path, name: &str) -> ((usize, usize), Vec<f32>) {
+    let exr = exr::prelude::read_first_flat_layer_from_file(path)
+        .unwrap_or_else(|e| panic!("{} is no OpenEXR file: {e}", path.display()));
+    let layer = &exr.layer_data;
+    let channel = layer
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .unwrap_or_else(|| panic!("{}: no channel {name}", path.display()));
+    (
+        (layer.size.0, layer.size.1),
+        channel.sample_data.values_as_f32().collect(),
+    )
+}
+
 /// `--passes normal,id` on a lit sphere (its normals the relighting's PCA normals) and an
 /// unlit one (its Gaussians' least axes): OUT/normal/frame_00000.exr (channels R, G, B,
 /// read back by the exr crate) holds unit camera-space normals that face the camera and
@@ -752,20 +770,8 @@ fn normal_and_id_passes_name_what_each_pixel_shows() {
     let ids = image::open(dir.path().join("o/id/frame_00000.png")).unwrap();
     assert_eq!(ids.color(), image::ColorType::L16);
     let ids = ids.to_luma16();
-    let exr =
-        exr::prelude::read_first_flat_layer_from_file(dir.path().join("o/normal/frame_00000.exr"))
-            .expect("the normal pass is an OpenEXR file");
-    let channel = |name: &str| -> Vec<f32> {
-        exr.layer_data
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name.to_string() == name)
-            .unwrap_or_else(|| panic!("a channel {name}"))
-            .sample_data
-            .values_as_f32()
-            .collect()
-    };
+    let normal = dir.path().join("o/normal/frame_00000.exr");
+    let channel = |name: &str| exr_channel(&normal, name).1;
     let (nx, ny, nz) = (channel("R"), channel("G"), channel("B"));
     let (w, h) = (96usize, 64usize);
     let mut count = [0usize; 3];
@@ -845,18 +851,8 @@ fn passes_are_written_beside_the_frames() {
         covered > 100 && covered < 64 * 48,
         "{covered} pixels covered"
     );
-    let exr =
-        exr::prelude::read_first_flat_layer_from_file(dir.path().join("o/depth/frame_00000.exr"))
-            .expect("the depth pass is an OpenEXR file");
-    let layer = &exr.layer_data;
-    assert_eq!((layer.size.0, layer.size.1), (64, 48));
-    let z = layer
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == "Z")
-        .expect("a Z channel");
-    let values: Vec<f32> = z.sample_data.values_as_f32().collect();
+    let (size, values) = exr_channel(&dir.path().join("o/depth/frame_00000.exr"), "Z");
+    assert_eq!(size, (64, 48));
     let (mut lo, mut hi, mut infinite) = (f32::INFINITY, 0.0f32, 0);
     for (v, a) in values.iter().zip(alpha.pixels()) {
         if a[3] == 0 && !v.is_finite() {

@@ -7,12 +7,14 @@
 //! the Gaussian that contributes most (0 where nothing was drawn), ids as the manifest's
 //! `ids` table names them ([`IdTable`]).
 
+use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use crate::render::{PassSet, Splats};
+use crate::splat::NO_LABEL;
 
 /// A pass beside the colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -134,38 +136,29 @@ impl IdTable {
     /// From the objects' runs of `splats` (name, Gaussians) and the splats' region labels.
     /// More than 65,535 pairs do not fit the 16-bit PNG: the rest share the last id.
     pub fn new(objects: &[(String, Range<usize>)], splats: &Splats) -> IdTable {
-        let mut table = IdTable {
-            entries: Vec::new(),
-            ids: vec![0; splats.len()],
-        };
+        let mut entries: Vec<IdEntry> = Vec::new();
+        let mut ids = vec![0; splats.len()];
+        // (object, label id) → id: one lookup per Gaussian, one name copy per pair. An
+        // object may come in several runs (its static and its simulated Gaussians).
+        let mut known: HashMap<(&str, u16), u16> = HashMap::new();
         for (name, run) in objects {
             for g in run.clone() {
-                let region = splats.label_name(g).map(str::to_string);
-                table.ids[g] = table.id_of(name, region);
+                let label = splats.labels.get(g).copied().unwrap_or(NO_LABEL);
+                ids[g] = *known.entry((name.as_str(), label)).or_insert_with(|| {
+                    if entries.len() >= usize::from(u16::MAX) {
+                        return u16::MAX;
+                    }
+                    let id = entries.len() as u16 + 1;
+                    entries.push(IdEntry {
+                        id,
+                        object: name.clone(),
+                        region: splats.label_name(g).map(str::to_string),
+                    });
+                    id
+                });
             }
         }
-        table
-    }
-
-    fn id_of(&mut self, object: &str, region: Option<String>) -> u16 {
-        if let Some(e) = self
-            .entries
-            .iter()
-            .rev()
-            .find(|e| e.object == object && e.region == region)
-        {
-            return e.id;
-        }
-        if self.entries.len() >= usize::from(u16::MAX) {
-            return u16::MAX;
-        }
-        let id = self.entries.len() as u16 + 1;
-        self.entries.push(IdEntry {
-            id,
-            object: object.to_string(),
-            region,
-        });
-        id
+        IdTable { entries, ids }
     }
 }
 
