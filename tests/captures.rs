@@ -12,6 +12,7 @@ use glam::{Mat3, Quat, Vec3};
 use splatter::render::camera::{look_at_rotation, DEFAULT_NEAR};
 use splatter::render::{cpu, Camera, Splats};
 use splatter::run::{Input, Run, RunOptions};
+use splatter::sim::time_step::StepPlan;
 use splatter::splat::formats::read_splats;
 use splatter::splat::inspect::{
     cameras_up, inspect, inspect_with_cameras, robust_bounds, UpEvidence,
@@ -228,7 +229,15 @@ fn drop(
     while done < steps {
         let k = (steps - done).min(100);
         let frame = sim
-            .step_frame(&gpu, k, done as f64 * setup.params.dt)
+            .step_frame(
+                &gpu,
+                StepPlan {
+                    dt: setup.params.dt,
+                    steps: k,
+                },
+                done as f64 * setup.params.dt,
+                0,
+            )
             .unwrap();
         sim.fit_pool(&gpu, &frame.watchdog).unwrap();
         done += k;

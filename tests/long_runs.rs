@@ -617,3 +617,98 @@ fn video_needs_ffmpeg_and_gets_the_frames() {
         assert_eq!(manifest(&d.join("o"))["status"], "failed");
     }
 }
+
+/// Lone particles of a cohesionless NACC material (α₀ 6), thrown up at 65–100 m/s into a
+/// separating ceiling at Δx 0.006, each alone on its stencil (3 cells apart or more): the
+/// splash of a 40 m/s impact at a finer resolution, as the dragonfruit's blow-up began
+/// (docs/notes/stability.md). At the wave bound's Δt (4.7e-5 s; 0.5–0.8 cells a step) the
+/// wall, which stops the nodes above a particle but not those below, compresses it by more
+/// than its size in one step: its deformation increment I + Δt C inverts, the return
+/// mapping starts from a clamped F, the hardening reads that as a 10⁴-fold compaction
+/// (α −0.4 → −13.5, p₀ ~ 10⁷ κ), and the particle, now elastic whatever it meets, rings on
+/// its own stencil until it leaves the domain at 10³ m/s. The positions and speeds are
+/// those of a sweep in which each of them blew up on the gather path.
+fn splash_scene(step: &str) -> String {
+    let cases = [
+        (80.0, 0.0, -0.04),
+        (80.0, 0.0, 6.0),
+        (80.0, 0.6, 6.0),
+        (100.0, 0.3, -0.04),
+        (100.0, 0.3, 6.0),
+        (100.0, 0.6, -0.04),
+        (100.0, 0.6, 6.0),
+        (65.0, 0.0, 6.0),
+    ];
+    let objects: Vec<String> = cases
+        .iter()
+        .enumerate()
+        .map(|(i, (v, phase, alpha0))| {
+            // 5 cells apart, on nodes in x and y; `phase` cells above a node in z.
+            let x = 0.03 * (1 + i % 4) as f64;
+            let y = 0.03 * (1 + i / 4) as f64;
+            let z = 0.03 + phase * 0.006;
+            format!(
+                r#"{{"name": "drop {i}",
+      "procedural": {{"shape": "sphere", "radius": 0.002, "spacing": 0.001, "color": [0.9, 0.2, 0.2]}},
+      "transform": {{"translate": [{x}, {y}, {z}]}},
+      "physics": {{"material": {{"model": "nacc", "E": 2000, "nu": 0.42, "density": 2, "alpha0": {alpha0}, "beta": 1, "xi": 2, "M": 2.36}},
+                  "fill": true, "velocity": [0, 0, {v}]}}}}"#
+            )
+        })
+        .collect();
+    format!(
+        r#"{{
+  "output": {{"width": 32, "height": 24, "frames": 3, "fps": 24}},
+  "camera": {{"fov_y_deg": 40, "path": {{"type": "orbit", "target": [0.075, 0.045, 0.03], "radius": 0.3, "height": 0.05}}}},
+  "simulation": {{"dx": 0.006, "domain": {{"lo": [0, 0, 0], "hi": [0.15, 0.09, 0.06]}},
+                 "walls": {{"kind": "separate"}}, "ground": {{"kind": "sticky"}}, {step}}},
+  "objects": [
+    {}
+  ]
+}}"#,
+        objects.join(",\n    ")
+    )
+}
+
+/// A frame whose steps invert a particle's deformation runs again at half the step
+/// (`sim::frame`): the splash of [`splash_scene`] at the wave bound's step (cfl_velocity 1:
+/// the speeds alone would allow it) survives, frame 1 in more steps than planned and with
+/// no inversion left. With the same step fixed by a scene `dt` (kept as written) it stops,
+/// and the message names where it began: the inverted steps, their first step and
+/// particle, and what to change.
+#[test]
+fn a_splash_whose_steps_invert_at_a_wall_is_run_again_at_a_shorter_step() {
+    let dir = TempDir::new().unwrap();
+    let d = dir.path();
+    let run =
+        |scene: &str, out: &str| splatter(d, &["render", scene, "--out", out, "--deterministic"]);
+    write(d, "follow.json", &splash_scene(r#""cfl_velocity": 1"#));
+    let o = run("follow.json", "follow");
+    expect_success(&o);
+    assert!(
+        !stderr(&o).contains("inverted their deformation"),
+        "an inversion was left:\n{}",
+        stderr(&o)
+    );
+    let m = manifest(&d.join("follow"));
+    let planned = (1.0 / 24.0 / 4.746e-5_f64).ceil() as u64;
+    let frame = &m["frames"]["1"];
+    let halvings = frame["halvings"].as_u64().unwrap_or(0);
+    let steps = frame["steps"].as_u64().expect("steps");
+    assert!(
+        halvings >= 1 && steps == planned << halvings,
+        "frame 1: {steps} steps, {halvings} halvings of the wave bound's {planned}"
+    );
+
+    write(d, "fixed.json", &splash_scene(r#""dt": 4.75e-5"#));
+    let line = expect_error(&run("fixed.json", "fixed"));
+    for part in [
+        "inverted their deformation",
+        "first at step",
+        "of objects[",
+        "(nacc)",
+        "simulation.dt",
+    ] {
+        assert!(line.contains(part), "no {part:?} in: {line}");
+    }
+}

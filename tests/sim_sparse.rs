@@ -8,6 +8,7 @@ use std::time::Instant;
 use glam::DVec3;
 use splatter::gpu::GpuContext;
 use splatter::sim::gpu::{GpuSim, P2gPath};
+use splatter::sim::time_step::StepPlan;
 use splatter::sim::{
     Boundaries, Condition, DomainWalls, Grid, Material, Particles, StepParams, Transfer,
 };
@@ -140,7 +141,11 @@ fn an_overflowed_frame_rerun_from_the_saved_state_equals_a_clean_run() {
     let mut sim = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
     sim.set_pool_blocks(&gpu, 4).unwrap();
     assert!(sim.pool_can_overflow());
-    let frame = sim.step_frame(&gpu, steps, 0.0).unwrap();
+    let plan = StepPlan {
+        dt: params.dt,
+        steps,
+    };
+    let frame = sim.step_frame(&gpu, plan, 0.0, 0).unwrap();
     let reruns = frame.reruns;
     assert_eq!(frame.watchdog.pool_overflow, 0);
     let got = sim.read_particles(&gpu, &p).unwrap();
@@ -160,7 +165,15 @@ fn an_overflow_past_the_adapters_pool_limit_is_an_error() {
     let mut sim = GpuSim::with_path(&gpu, &p, &grid, &materials, &params, P2gPath::Gather).unwrap();
     sim.limit_pool_blocks(&gpu, 8).unwrap();
     assert!(sim.pool_at_limit() && sim.pool_can_overflow());
-    match sim.step_frame(&gpu, 2, 0.0) {
+    match sim.step_frame(
+        &gpu,
+        StepPlan {
+            dt: params.dt,
+            steps: 2,
+        },
+        0.0,
+        0,
+    ) {
         Err(e @ FrameError::PoolAtLimit { needed, limit }) => {
             assert!(needed > 8 && limit == 8, "{e}");
             assert!(e.to_string().contains("coarser grid"), "{e}");

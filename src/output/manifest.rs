@@ -111,6 +111,10 @@ pub struct FrameTiming {
     /// follows the motion unless the scene sets `dt`); absent without a simulation.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub steps: Option<u32>,
+    /// How often this frame's steps were too long (a particle's step inverted it, or NaN)
+    /// and the frame ran again at half the step; absent when none were.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub halvings: Option<u32>,
     /// Loading the frame's state (`--from-states`).
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub load_ms: Option<f64>,

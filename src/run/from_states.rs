@@ -130,6 +130,7 @@ impl StateFrames<'_> {
         let timing = FrameTiming {
             simulate_ms: 0.0,
             steps: None,
+            halvings: None,
             load_ms: Some(load_ms),
             render_ms: t1.elapsed().as_secs_f64() * 1e3,
             gpu_ms: 0.0,

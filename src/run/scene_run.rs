@@ -27,7 +27,9 @@ use crate::splat::sh::ShRotator;
 
 mod messages;
 mod setup;
-use messages::{describe_lighting, describe_simulation, watchdog_message};
+use messages::{
+    describe_lighting, describe_simulation, inversion_warning, watchdog_message, Failure,
+};
 use setup::{
     create_outputs, first_missing_frame, manifest_settings, note_scene, plan_gpu, prepare_lighting,
     prepare_simulation, recomputed_normals, resume_state,
@@ -133,6 +135,9 @@ struct Simulation<'a> {
     rigid: Vec<(&'a KinematicObject, RigidDerive)>,
     /// The steps so far and the last frame's largest speed (the next Δt follows it).
     clock: Clock,
+    /// Whether steps that inverted a particle's deformation have been reported (once a
+    /// run).
+    warned_inversion: bool,
 }
 
 impl<'a> Simulation<'a> {
@@ -198,18 +203,20 @@ impl<'a> Simulation<'a> {
             derive,
             rigid,
             clock,
+            warned_inversion: false,
         })
     }
 
     /// The steps that lead to `frame` (none for the first simulated frame), then the pool
-    /// fitted for the next frame; a watchdog count stops the run. Returns the steps taken.
+    /// fitted for the next frame; a watchdog count stops the run. Returns the steps taken
+    /// and how often the frame's Δt was halved on the way.
     fn advance_to(
         &mut self,
         gpu: &GpuContext,
         scene: &Scene,
         frame: u32,
         first: u32,
-    ) -> Result<u32> {
+    ) -> Result<Advanced> {
         let s = self.setup;
         let before = self.clock;
         let plan = match s.step_rule.frame_steps(before.speed) {
@@ -220,36 +227,63 @@ impl<'a> Simulation<'a> {
                 bail!("frame {frame}: {e}; the fastest is {culprit}; try a smaller simulation.cfl, or a scene whose speeds the grid can follow")
             }
         };
-        let w = if frame > first {
-            self.sim.set_dt(gpu, plan.dt)?;
+        let (w, plan, halvings) = if frame > first {
             // The moving colliders' clock: this frame's steps start at frame − 1.
             let start = f64::from(frame - 1) * s.step_rule.frame;
-            let w = match self.sim.step_frame(gpu, plan.steps, start) {
-                Ok(steps) => steps.watchdog,
+            let done = match self
+                .sim
+                .step_frame(gpu, plan, start, s.step_rule.max_halvings())
+            {
+                Ok(done) => done,
                 Err(FrameError::Gpu(e)) => return Err(e.into()),
                 Err(e) => bail!("frame {frame}: {e}"),
             };
             self.clock = Clock {
-                speed: f64::from(w.speed_max),
-                steps_done: before.steps_done + u64::from(plan.steps),
+                speed: f64::from(done.watchdog.speed_max),
+                steps_done: before.steps_done + u64::from(done.plan.steps),
             };
-            w
+            (done.watchdog, done.plan, done.halvings)
         } else {
-            self.sim.take_watchdog(gpu)?
+            (self.sim.take_watchdog(gpu)?, plan, 0)
         };
         // Sparse grid: room for the active region to double before the next read.
         self.sim.fit_pool(gpu, &w)?;
+        let inverted = match w.inverted_first_particle {
+            Some(p) if w.failed() && Some(p) == w.first_particle => {
+                Some("the same particle".to_string())
+            }
+            Some(p) if w.failed() || !self.warned_inversion => {
+                Some(self.describe_particle(gpu, scene, p)?.0)
+            }
+            _ => None,
+        };
         if w.failed() {
             let culprit = match w.first_particle {
                 Some(p) => Some(self.describe_particle(gpu, scene, p)?),
                 None => None,
             };
-            bail!(
-                "{}",
-                watchdog_message(frame, w, s, plan, before.steps_done, culprit)
-            );
+            let failure = Failure {
+                frame,
+                watchdog: w,
+                plan,
+                halvings,
+                steps_before: before.steps_done,
+                culprit,
+                inverted,
+            };
+            bail!("{}", watchdog_message(&failure, s));
         }
-        Ok(if frame > first { plan.steps } else { 0 })
+        if let Some(particle) = inverted {
+            log::warn!(
+                "{}",
+                inversion_warning(frame, &w, plan, before.steps_done, &particle, s)
+            );
+            self.warned_inversion = true;
+        }
+        Ok(Advanced {
+            steps: if frame > first { plan.steps } else { 0 },
+            halvings,
+        })
     }
 
     /// The index of the fastest particle (read back from the GPU).
@@ -304,6 +338,13 @@ impl<'a> Simulation<'a> {
     }
 }
 
+/// What [`Simulation::advance_to`] took: the steps that stood, and how often the frame
+/// ran again at half the step.
+struct Advanced {
+    steps: u32,
+    halvings: u32,
+}
+
 /// The frame loop's state.
 struct Frames<'a> {
     job: &'a Job,
@@ -343,7 +384,9 @@ impl Frames<'_> {
             let t0 = Instant::now();
             let mut timing = FrameTiming::default();
             if let Some(sim) = sim.as_deref_mut() {
-                timing.steps = Some(sim.advance_to(self.gpu, &self.job.scene, frame, first_sim)?);
+                let done = sim.advance_to(self.gpu, &self.job.scene, frame, first_sim)?;
+                timing.steps = Some(done.steps);
+                timing.halvings = (done.halvings > 0).then_some(done.halvings);
                 if self.job.opts.checkpoint_every > 0
                     && frame > first_sim
                     && frame % self.job.opts.checkpoint_every == 0

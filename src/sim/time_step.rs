@@ -7,11 +7,21 @@
 //! motion. v_max is not known before a frame's steps run, so a frame takes the largest
 //! speed the previous frame's steps saw (the watchdog's) plus what gravity adds over a
 //! frame, and its Δt is the frame's length over a whole number of equal steps.
+//!
+//! What a frame meets within its steps the rule cannot see in advance: a splash that
+//! reaches a wall faster than the last frame moved, or a state that the law's hardening has
+//! made stiffer than the materials' c. The watchdog sees its sign, a step that inverted a
+//! particle's deformation (det(I + Δt C) ≤ 0) or NaN, and the frame runs again from its
+//! start at half the step, up to [`MAX_HALVINGS`] times (`sim::frame`).
 
 /// A frame's step count may not grow past the wave bound's by more than this: a speed that
 /// would need more steps is an instability, not motion (a blown-up particle reads as
 /// 10⁶ m/s), and the run stops instead of crawling.
 pub const MAX_SHRINK: f64 = 64.0;
+
+/// A frame whose steps were too long runs again at half the step at most this many times
+/// (down to Δt/16 of its plan).
+pub const MAX_HALVINGS: u32 = 4;
 
 /// At most this many steps a frame.
 const MAX_STEPS: f64 = 1e7;
@@ -32,10 +42,20 @@ pub struct StepRule {
 }
 
 /// A frame's steps: Δt and how many fill the frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct StepPlan {
     pub dt: f64,
     pub steps: u32,
+}
+
+impl StepPlan {
+    /// The same frame in twice as many steps of half the length.
+    pub fn halved(self) -> StepPlan {
+        StepPlan {
+            dt: self.dt / 2.0,
+            steps: self.steps.saturating_mul(2),
+        }
+    }
 }
 
 /// A speed that would need a step more than [`MAX_SHRINK`] times under the wave bound.
@@ -60,6 +80,16 @@ pub struct Clock {
 }
 
 impl StepRule {
+    /// How often a frame may halve its step when the steps were too long: never with a
+    /// scene's own `dt` (the user's step is kept as written).
+    pub fn max_halvings(&self) -> u32 {
+        if self.cfl_velocity.is_some() {
+            MAX_HALVINGS
+        } else {
+            0
+        }
+    }
+
     /// The steps of a frame after one whose particles moved at most `speed` (m/s).
     pub fn frame_steps(&self, speed: f64) -> Result<StepPlan, TooFast> {
         let mut dt = self.dt_max;

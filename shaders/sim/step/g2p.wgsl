@@ -51,6 +51,15 @@ fn count_failure(slot: u32, p: u32) {
     atomicMax(&flags[WATCH_FIRST_STEP], ~(atomicLoad(&flags[WATCH_STEP]) - 1u));
 }
 
+// Counts particle p's step as inverting its deformation (det(I + Δt C) ≤ 0), keeping the
+// lowest particle and the earliest step as count_failure does. Rare, so the atomics cost
+// nothing in a healthy step.
+fn count_inversion(p: u32) {
+    atomicAdd(&flags[WATCH_INVERTED], 1u);
+    atomicMax(&flags[WATCH_INVERTED_FIRST_PARTICLE], ~(page.base + p));
+    atomicMax(&flags[WATCH_INVERTED_FIRST_STEP], ~(atomicLoad(&flags[WATCH_STEP]) - 1u));
+}
+
 // The largest speed of the frame: most particles only read it, so that the one word is
 // not written by every particle of every step.
 fn record_speed(speed: f32) {
@@ -143,7 +152,16 @@ fn main(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) nwg: vec
             }
         }
     }
-    let f_trial = (SIM_IDENTITY3 + c * consts.dt) * deformation[p];
+    // The step's deformation increment. The flow of a velocity field never inverts matter:
+    // det ≤ 0 means Δt was too long for this particle's velocity gradient (a wall stopping
+    // it within its stencil, or its own stress ringing on its stencil), and the law's
+    // return mapping would start from a clamped, flattened F. The frame is then run again
+    // with a shorter step (sim::frame).
+    let increment = SIM_IDENTITY3 + c * consts.dt;
+    if determinant(increment) <= 0.0 {
+        count_inversion(p);
+    }
+    let f_trial = increment * deformation[p];
     v_volume[p] = vec4<f32>(v_new, vv.w);
     affine_velocity[p] = c;
     x_mass[p] = vec4<f32>(x, xm.w);

@@ -223,11 +223,18 @@ pub enum WatchSlot {
     /// The bitwise NOT of the lowest index of a particle counted as non-finite or escaped
     /// (0: none).
     FirstParticle,
+    /// Particle-steps whose deformation increment inverted, det(I + Δt C) ≤ 0
+    /// (`g2p.wgsl`): the step was too long for the velocity gradient there.
+    Inverted,
+    /// The first step that counted an inversion, as its bitwise NOT (0: none).
+    InvertedFirstStep,
+    /// The bitwise NOT of the lowest index of a particle counted as inverted (0: none).
+    InvertedFirstParticle,
 }
 
 impl WatchSlot {
     /// Every slot, in word order.
-    pub const ALL: [WatchSlot; 9] = [
+    pub const ALL: [WatchSlot; 12] = [
         WatchSlot::Nonfinite,
         WatchSlot::Escaped,
         WatchSlot::FirstStep,
@@ -237,6 +244,9 @@ impl WatchSlot {
         WatchSlot::FixedPointRange,
         WatchSlot::SpeedMax,
         WatchSlot::FirstParticle,
+        WatchSlot::Inverted,
+        WatchSlot::InvertedFirstStep,
+        WatchSlot::InvertedFirstParticle,
     ];
 
     /// Words in the buffer.
@@ -258,6 +268,9 @@ impl WatchSlot {
             WatchSlot::FixedPointRange => "WATCH_FIXED_POINT_RANGE",
             WatchSlot::SpeedMax => "WATCH_SPEED_MAX",
             WatchSlot::FirstParticle => "WATCH_FIRST_PARTICLE",
+            WatchSlot::Inverted => "WATCH_INVERTED",
+            WatchSlot::InvertedFirstStep => "WATCH_INVERTED_FIRST_STEP",
+            WatchSlot::InvertedFirstParticle => "WATCH_INVERTED_FIRST_PARTICLE",
         }
     }
 }

@@ -31,6 +31,9 @@ impl GpuSim {
             fixed_point_range: v(WatchSlot::FixedPointRange),
             speed_max: f32::from_bits(v(WatchSlot::SpeedMax)),
             first_particle: not_zero(v(WatchSlot::FirstParticle)),
+            inverted: v(WatchSlot::Inverted),
+            inverted_first_step: not_zero(v(WatchSlot::InvertedFirstStep)),
+            inverted_first_particle: not_zero(v(WatchSlot::InvertedFirstParticle)),
         })
     }
 
