@@ -190,6 +190,25 @@ fn frame_zero(scene: &scene::Scene) -> (Splats, usize) {
     (splats, setup.static_count)
 }
 
+/// Every shipped scene sets up its simulation as written and at `--quality high` (Δx and
+/// every spacing halved): its objects, filled, lie inside the domain it writes (within the
+/// half cell the check allows, which halves with Δx), so that `splatter render SCENE` and
+/// the finer runs of `benches/stability/finer.py` start. The render test above runs at
+/// draft quality, whose slack of half a coarse cell let a scene poke through its ceiling.
+#[test]
+fn every_shipped_scene_sets_up_as_written_and_finer() {
+    for file in scenes() {
+        for quality in [Quality::Standard, Quality::High] {
+            let mut s = scene::load(&file).unwrap();
+            s.apply_quality(quality);
+            let (splats, report) = s.build_splats().unwrap();
+            if let Err(e) = scene::simulation::prepare(&s, splats, &report) {
+                panic!("{} at {quality:?} quality: {e}", file.display());
+            }
+        }
+    }
+}
+
 /// Every shipped scene renders its first two frames (64×48, draft quality), and they show
 /// the scene. Each frame is checked against Gaussians projected on the CPU with the
 /// frame's camera (the CPU reference's projection, not the rasteriser): frame 0 against
