@@ -17,7 +17,7 @@ Usage:
       dx and every spacing by S (as `splatter-lab suite --scale S`; quality standard); --p2g
       forces a P2G path (gather, atomic, fixed).
 
-The one-call check for a lent GPU (the suite's failures at the paper's resolution):
+The one-call check on a GPU (the suite's failures at the paper's resolution):
   python3 benches/stability/finer.py target/release/splatter /tmp/gpu --scale 0.3 \
       --frames 4 scenes/pumpkin.json scenes/dragonfruit.json
   and the same with --p2g atomic, then --p2g gather.
